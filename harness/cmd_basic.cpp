@@ -1,0 +1,65 @@
+// list, run and report.
+#include "args.hpp"
+#include "commands.hpp"
+#include "common.hpp"
+
+#include "../problems/error.hpp"
+#include "../problems/scene.hpp"
+#include "../solvers/linear_solver.hpp"
+
+#include <filesystem>
+#include <iostream>
+
+namespace xb {
+
+int cmd_list(const CommandArgs& argv) {
+  Args args("list", argv, {});
+  std::cout << "scenes:\n";
+  for (const auto& s : scene_names()) std::cout << "  " << s << "\n";
+  std::cout << "solvers:\n";
+  for (const auto& m : methods()) {
+    std::cout << "  " << m.name << (m.local ? "  [local]" : "  [global]");
+    if (!m.available) std::cout << "  unavailable: " << m.reason;
+    std::cout << "\n";
+  }
+  return 0;
+}
+
+int cmd_run(const CommandArgs& argv) {
+  Args args("run", argv,
+            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}});
+  // Everything is checked before anything is written.
+  const std::string scene = args.require("--scene");
+  const std::string out = args.require("--out");
+  std::vector<std::string> sets;
+  if (args.has("--frames")) sets.push_back("frames=" + args.get("--frames"));
+  for (const auto& s : args.all("--set")) sets.push_back(s);
+  const Params p = resolve_params(scene, sets);
+  const auto solvers = parse_methods(args.require("--solver"));
+  RunOptions opt;
+  opt.time_budget = args.get_double("--time-budget", 0);
+  if (opt.time_budget < 0) throw Error("run: --time-budget must be >= 0");
+  const Problem prob = build_problem(p);
+
+  int index = 0;
+  for (const auto& method : solvers) {
+    std::cerr << "run: " << p.scene << " with " << method << " ..." << std::flush;
+    const RunResult res = run_simulation(prob, p, method, opt);
+    std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
+    ++index;
+    append_runs(out, {make_simulation_record(run_name(index, p.scene, method), p, method, res)}, index == 1);
+  }
+  print_report(out, "table");
+  return 0;
+}
+
+int cmd_report(const CommandArgs& argv) {
+  Args args("report", argv, {{"--format"}}, 1);
+  if (args.positional().empty()) throw Error("report: which results file? (report FILE.h5 [--format table|json])");
+  const std::string format = args.get("--format", "table");
+  if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
+  print_report(args.positional()[0], format);
+  return 0;
+}
+
+}  // namespace xb

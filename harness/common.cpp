@@ -1,0 +1,233 @@
+#include "common.hpp"
+
+#include "../problems/error.hpp"
+#include "../problems/scene.hpp"
+#include "../solvers/linear_solver.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#ifndef XB_GIT_SHA
+#define XB_GIT_SHA "unknown"
+#endif
+
+namespace xb {
+
+Params resolve_params(const std::string& scene, const std::vector<std::string>& sets) {
+  Params p;
+  load_scene_file(resolve_scene(scene), p);
+  for (const auto& kv : sets) apply_set(p, kv);
+  validate(p);
+  return p;
+}
+
+void apply_set(Params& p, const std::string& kv) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos || eq == 0) throw Error("--set '" + kv + "': expected key=value");
+  set_param(p, kv.substr(0, eq), kv.substr(eq + 1), "--set");
+}
+
+std::vector<std::string> parse_methods(const std::string& list, bool linear_only) {
+  std::vector<std::string> names;
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) names.push_back(item);
+  if (names.empty()) throw Error("no solver given (--solver A,B,...)");
+  for (const auto& n : names) {
+    const MethodInfo* m = find_method(n);
+    if (!m || (linear_only && m->local)) {
+      std::string valid;
+      for (const auto& x : methods())
+        if (!(linear_only && x.local)) valid += (valid.empty() ? "" : ", ") + x.name;
+      throw Error("unknown solver '" + n + "' (valid: " + valid + ")");
+    }
+    if (!m->available) throw Error("solver '" + n + "' is not available: " + m->reason);
+  }
+  return names;
+}
+
+namespace {
+std::string machine_description() {
+  char host[256] = "";
+  gethostname(host, sizeof host);
+  std::string cpu;
+  std::ifstream f("/proc/cpuinfo");
+  for (std::string line; std::getline(f, line);)
+    if (line.rfind("model name", 0) == 0) {
+      cpu = line.substr(line.find(':') + 2);
+      break;
+    }
+  return std::string(host) + "; " + cpu + "; " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + " cores";
+}
+
+std::string now_iso() {
+  std::time_t t = std::time(nullptr);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+}  // namespace
+
+void add_provenance(RunRecord& r, const Params& p) {
+  for (const auto& f : param_fields()) {
+    const ParamValue v = param_value(p, f);
+    if (auto* i = std::get_if<long long>(&v)) r.attrs[f.key] = *i;
+    else if (auto* d = std::get_if<double>(&v)) r.attrs[f.key] = *d;
+    else r.attrs[f.key] = std::get<std::string>(v);
+  }
+  r.attrs["git_sha"] = std::string(XB_GIT_SHA);
+  r.attrs["machine"] = machine_description();
+  r.attrs["omp_threads"] = static_cast<long long>(omp_get_max_threads());
+  r.attrs["created"] = now_iso();
+}
+
+RunRecord make_simulation_record(const std::string& name, const Params& p, const std::string& method,
+                                 const RunResult& res) {
+  RunRecord r;
+  r.name = name;
+  add_provenance(r, p);
+  r.attrs["level"] = std::string("simulation");
+  r.attrs["scene"] = p.scene;
+  r.attrs["solver"] = method;
+  r.attrs["status"] = res.status;
+  r.attrs["message"] = res.message;
+  r.attrs["outer_iterations"] = res.outer_iterations;
+  r.attrs["final_dual_residual"] = res.final_dual_residual;
+  r.attrs["relative_dual_residual"] = res.relative_dual_residual;
+  r.attrs["wall_time"] = res.wall_time;
+  r.attrs["substeps_total"] = static_cast<long long>(res.substeps_total);
+  r.attrs["substeps_converged"] = static_cast<long long>(res.substeps_converged);
+  for (const auto& [k, v] : res.stats) r.attrs[k] = v;
+  for (const auto& [k, v] : res.arrays) r.datasets[k] = v;
+  const IterationLog& L = res.log;
+  r.datasets["frame"] = L.frame;
+  r.datasets["substep"] = L.substep;
+  r.datasets["iteration"] = L.iteration;
+  r.datasets["dual_residual"] = L.dual_residual;
+  r.datasets["relative_dual_residual"] = L.relative_dual_residual;
+  r.datasets["primal_residual"] = L.primal_residual;
+  r.datasets["energy"] = L.energy;
+  r.datasets["wall_time"] = L.wall_time;
+  r.datasets["step_time"] = L.step_time;
+  const MethodInfo* m = find_method(method);
+  if (m && !m->local) {
+    r.datasets["linear_iterations"] = L.linear_iterations;
+    r.datasets["linear_setup_time"] = L.linear_setup_time;
+    r.datasets["linear_solve_time"] = L.linear_solve_time;
+    r.datasets["linear_relative_residual"] = L.linear_relative_residual;
+    r.datasets["linear_setup_action"] = L.linear_setup_action;
+    r.datasets["linear_history/residual"] = L.linear_history_residual;
+    r.datasets["linear_history/time"] = L.linear_history_time;
+    r.datasets["linear_history/offset"] = L.linear_history_offset;
+  }
+  std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
+  r.datasets["final_positions"] = pos;
+  return r;
+}
+
+std::string run_name(int index, const std::string& scene, const std::string& solver) {
+  std::ostringstream os;
+  os << std::setw(4) << std::setfill('0') << index << "_" << scene << "_" << solver;
+  return os.str();
+}
+
+namespace {
+std::string json_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '"': o += "\\\""; break;
+      case '\\': o += "\\\\"; break;
+      case '\n': o += "\\n"; break;
+      case '\t': o += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char b[8];
+          std::snprintf(b, sizeof b, "\\u%04x", c);
+          o += b;
+        } else {
+          o += c;
+        }
+    }
+  }
+  return o;
+}
+
+std::string json_value(const AttrValue& v) {
+  if (auto* i = std::get_if<long long>(&v)) return std::to_string(*i);
+  if (auto* d = std::get_if<double>(&v)) {
+    if (!std::isfinite(*d)) return "null";
+    char b[64];
+    std::snprintf(b, sizeof b, "%.17g", *d);
+    return b;
+  }
+  return "\"" + json_escape(std::get<std::string>(v)) + "\"";
+}
+
+std::string text(const RunRecord& r, const std::string& key) {
+  auto it = r.attrs.find(key);
+  if (it == r.attrs.end()) return "-";
+  if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
+  if (auto* d = std::get_if<double>(&it->second)) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.3g", *d);
+    return b;
+  }
+  return std::get<std::string>(it->second);
+}
+}  // namespace
+
+void print_report(const std::string& path, const std::string& format) {
+  const auto runs = read_runs(path, false);
+  if (format == "json") {
+    std::cout << "[";
+    for (size_t i = 0; i < runs.size(); ++i) {
+      std::cout << (i ? ",\n " : "\n ") << "{\"run\": \"" << json_escape(runs[i].name) << "\"";
+      for (const auto& [k, v] : runs[i].attrs) std::cout << ", \"" << json_escape(k) << "\": " << json_value(v);
+      std::cout << "}";
+    }
+    std::cout << "\n]\n";
+    return;
+  }
+  if (format != "table") throw Error("report: unknown format '" + format + "' (valid: table, json)");
+  // One table per level of run, with the columns that matter for it.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> layouts = {
+      {"simulation", {"scene", "solver", "status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"}},
+      {"linear", {"system", "solver", "status", "iterations", "final_relative_residual", "error_vs_direct", "setup_time", "solve_time", "levels", "operator_complexity"}},
+  };
+  for (const auto& [level, cols] : layouts) {
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& r : runs)
+      if (text(r, "level") == level) {
+        std::vector<std::string> row{r.name};
+        for (const auto& c : cols) row.push_back(text(r, c));
+        rows.push_back(row);
+      }
+    if (rows.empty()) continue;
+    std::vector<std::string> header{"run"};
+    header.insert(header.end(), cols.begin(), cols.end());
+    std::vector<size_t> width(header.size());
+    for (size_t c = 0; c < header.size(); ++c) {
+      width[c] = header[c].size();
+      for (const auto& row : rows) width[c] = std::max(width[c], row[c].size());
+    }
+    auto line = [&](const std::vector<std::string>& row) {
+      for (size_t c = 0; c < row.size(); ++c) std::cout << std::left << std::setw(width[c] + 2) << row[c];
+      std::cout << "\n";
+    };
+    line(header);
+    for (const auto& row : rows) line(row);
+    std::cout << "\n";
+  }
+}
+
+}  // namespace xb

@@ -1,0 +1,33 @@
+// What the sub-commands share: parameters from scene + overrides, method lists, run records.
+#pragma once
+
+#include "../problems/params.hpp"
+#include "recorder.hpp"
+#include "stepper.hpp"
+
+#include <string>
+#include <vector>
+
+namespace xb {
+
+// defaults ← the scene spec ← --set key=value overrides (in order), then validate().
+Params resolve_params(const std::string& scene_name_or_file, const std::vector<std::string>& sets);
+// "key=value" → set_param (where = "--set").
+void apply_set(Params& p, const std::string& key_value);
+
+// A comma-separated list of method names, each known and available; throws listing valid ones.
+// linear_only rejects the local methods.
+std::vector<std::string> parse_methods(const std::string& list, bool linear_only = false);
+
+// Provenance and the whole parameter set, as attributes of a run.
+void add_provenance(RunRecord& r, const Params& p);
+// A simulation run as a record: status and summary attributes, per-iteration datasets.
+RunRecord make_simulation_record(const std::string& name, const Params& p, const std::string& method,
+                                 const RunResult& res);
+// "0003_cloth_hang_xpbd-gs": index within the file, then what ran.
+std::string run_name(int index, const std::string& scene, const std::string& solver);
+
+// Prints a report of a results file: "table" or "json".
+void print_report(const std::string& path, const std::string& format);
+
+}  // namespace xb

@@ -1,0 +1,60 @@
+// xpbd-bench: the command-line entry point. Bad input ends with one line naming what is wrong
+// and exit code 2; nothing already written is lost.
+#include "commands.hpp"
+
+#include "../problems/error.hpp"
+
+#include <mpi.h>
+
+#include <cstring>
+#include <iostream>
+#include <string>
+
+namespace {
+struct Command {
+  const char* name;
+  int (*fn)(const xb::CommandArgs&);
+  const char* usage;
+};
+const Command commands[] = {
+    {"list", xb::cmd_list, "list                                  scenes and solvers, one per line"},
+    {"run", xb::cmd_run,
+     "run --scene NAME|FILE --solver A,B,... [--frames N] [--set key=value]... [--time-budget S] --out FILE.h5"},
+    {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
+};
+
+void usage(std::ostream& os) {
+  os << "usage: xpbd-bench COMMAND [options]\n";
+  for (const auto& c : commands) os << "  " << c.usage << "\n";
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rc = 0;
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage(argc < 2 ? std::cerr : std::cout);
+    rc = argc < 2 ? 2 : 0;
+  } else {
+    const std::string name = argv[1];
+    const Command* cmd = nullptr;
+    for (const auto& c : commands)
+      if (name == c.name) cmd = &c;
+    if (!cmd) {
+      std::cerr << "xpbd-bench: unknown command '" << name << "' (valid: list, run, report)\n";
+      rc = 2;
+    } else {
+      try {
+        rc = cmd->fn(xb::CommandArgs(argv + 2, argv + argc));
+      } catch (const xb::Error& e) {
+        std::cerr << "xpbd-bench: " << e.what() << "\n";
+        rc = 2;
+      } catch (const std::exception& e) {
+        std::cerr << "xpbd-bench: internal error: " << e.what() << "\n";
+        rc = 3;
+      }
+    }
+  }
+  MPI_Finalize();
+  return rc;
+}

@@ -1,0 +1,38 @@
+// The HDF5 recorder. One group per run under /runs, its scalars as attributes and its
+// per-iteration arrays as 1-D datasets; the schema is in results/README.md.
+//
+// A run is written completely or not at all: every append copies the file to FILE.tmp, adds the
+// runs there, flushes it to disk and renames it over FILE (rename is atomic), so an interrupt
+// (Ctrl-C, SIGKILL, power loss) leaves the previous complete file.
+#pragma once
+
+#include <map>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace xb {
+
+using AttrValue = std::variant<long long, double, std::string>;
+using DataValue = std::variant<std::vector<double>, std::vector<long long>, std::vector<std::string>>;
+
+struct RunRecord {
+  std::string name;                          // group name under /runs
+  std::map<std::string, AttrValue> attrs;
+  std::map<std::string, DataValue> datasets;  // a '/' in a name makes subgroups
+};
+
+constexpr int schema_version = 1;
+
+// Appends `runs` to `path` atomically. fresh = true starts a new file (replacing an old one
+// only when the new one is complete).
+void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh = false);
+
+// Reads every run (attributes; datasets too if with_datasets). Throws xb::Error for a file
+// that is missing or not an xpbd-bench results file.
+std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets = false);
+
+// The number of runs in a file (0 if it does not exist).
+int count_runs(const std::string& path);
+
+}  // namespace xb

@@ -1,0 +1,219 @@
+#include "stepper.hpp"
+
+#include "../problems/dual_system.hpp"
+#include "../problems/error.hpp"
+#include "../solvers/linear_solver.hpp"
+#include "../solvers/timer.hpp"
+#include "../solvers/xpbd_local.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+
+namespace xb {
+
+namespace {
+
+// Runaway: the dual residual grew this much over the substep's first one.
+constexpr double divergence_factor = 1e8;
+
+double primal_residual(const Problem& prob, const DualSystem& ds, const ConstraintState& s, const Eigen::Matrix3Xd& x,
+                       const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& lambda, Eigen::Matrix3Xd& work) {
+  ds.apply_gradT(s, lambda, work);
+  const Eigen::VectorXd& w = prob.particles.w;
+  double sum = 0;
+#pragma omp parallel for reduction(+ : sum) schedule(static)
+  for (int p = 0; p < static_cast<int>(x.cols()); ++p)
+    if (w[p] > 0) sum += ((x.col(p) - x_pred.col(p)) / w[p] - work.col(p)).squaredNorm();
+  return std::sqrt(sum);
+}
+
+double incremental_energy(const Problem& prob, const ConstraintState& s, const Eigen::Matrix3Xd& x,
+                          const Eigen::Matrix3Xd& x_pred, double h) {
+  const Eigen::VectorXd& w = prob.particles.w;
+  double kin = 0, pot = 0;
+  for (int p = 0; p < static_cast<int>(x.cols()); ++p)
+    if (w[p] > 0) kin += (x.col(p) - x_pred.col(p)).squaredNorm() / w[p];
+  for (int j = 0; j < prob.num_constraints(); ++j) {
+    const double a = prob.compliance(j);
+    if (a > 0) pot += s.C[j] * s.C[j] / a;
+  }
+  return kin / (2 * h * h) + pot / 2;
+}
+
+void project_colliders(const Problem& prob, Eigen::Matrix3Xd& x) {
+  for (const auto& plane : prob.planes)
+    for (int p = 0; p < static_cast<int>(x.cols()); ++p)
+      if (prob.particles.w[p] > 0 && x(1, p) < plane.height) x(1, p) = plane.height;
+}
+
+}  // namespace
+
+RunResult run_simulation(const Problem& prob_in, const Params& p, const std::string& method, const RunOptions& opt) {
+  const MethodInfo* info = find_method(method);
+  if (!info) (void)make_linear_solver(method, p);  // throws with the valid names
+  if (!info->available) throw Error("solver '" + method + "' is not available: " + info->reason);
+  if (p.threads > 0) omp_set_num_threads(p.threads);
+
+  RunResult res;
+  Timer run_clock;
+  Problem prob = prob_in;
+  DualSystem ds(prob);
+  const int m = prob.num_constraints();
+  const double h = p.dt / p.substeps;
+  const Eigen::VectorXd alpha_tilde = scaled_compliance(prob, h);
+  std::unique_ptr<LinearSolver> solver;
+  std::optional<LocalMethod> local;
+  if (info->local)
+    local.emplace(prob, ds, p, method == "xpbd-gs");
+  else
+    solver = make_linear_solver(method, p);
+
+  Particles& P = prob.particles;
+  Eigen::Matrix3Xd x_pred, x_old, dx, work;
+  Eigen::VectorXd lambda(m), b(m), dlambda;
+  ConstraintState state;
+  IterationLog& L = res.log;
+  bool first_setup = true;
+  bool stop = false;
+  bool any_max_iterations = false;
+
+  auto fail = [&](const std::string& status, const std::string& msg) {
+    res.status = status;
+    res.message = msg;
+    stop = true;
+  };
+
+  try {
+    for (int frame = 0; frame < p.frames && !stop; ++frame) {
+      for (int sub = 0; sub < p.substeps && !stop; ++sub) {
+        Timer sub_clock;
+        x_old = P.x;
+        for (int i = 0; i < P.size(); ++i)
+          if (P.w[i] > 0) P.v.col(i) += h * prob.gravity;
+        x_pred = P.x + h * P.v;
+        for (int i = 0; i < P.size(); ++i)
+          if (P.w[i] == 0) x_pred.col(i) = P.x.col(i);  // pins stay
+        P.x = x_pred;
+        lambda.setZero();
+        double r0 = 0;
+        bool converged = false;
+        LinearStats last_linear;
+        double last_step_time = 0;
+        std::string last_action;
+        ++res.substeps_total;
+        for (int it = 0;; ++it) {
+          evaluate_constraints(prob, P.x, state);
+          b = -(state.C + alpha_tilde.cwiseProduct(lambda));
+          const double dual = b.norm();
+          if (it == 0) r0 = dual;
+          // Log this state.
+          L.frame.push_back(frame);
+          L.substep.push_back(sub);
+          L.iteration.push_back(it);
+          L.dual_residual.push_back(dual);
+          L.relative_dual_residual.push_back(r0 > 0 ? dual / r0 : 0);
+          L.primal_residual.push_back(primal_residual(prob, ds, state, P.x, x_pred, lambda, work));
+          L.energy.push_back(incremental_energy(prob, state, P.x, x_pred, h));
+          L.wall_time.push_back(sub_clock.seconds());
+          L.step_time.push_back(it == 0 ? 0 : last_step_time);
+          L.linear_iterations.push_back(it == 0 ? 0 : last_linear.iterations);
+          L.linear_setup_time.push_back(it == 0 ? 0 : last_linear.setup_time);
+          L.linear_solve_time.push_back(it == 0 ? 0 : last_linear.solve_time);
+          L.linear_relative_residual.push_back(it == 0 ? 0 : last_linear.final_relative_residual);
+          L.linear_setup_action.push_back(it == 0 ? "" : last_action);
+          if (it > 0) {
+            L.linear_history_residual.insert(L.linear_history_residual.end(), last_linear.residual_history.begin(),
+                                             last_linear.residual_history.end());
+            L.linear_history_time.insert(L.linear_history_time.end(), last_linear.residual_time.begin(),
+                                         last_linear.residual_time.end());
+          }
+          L.linear_history_offset.push_back(static_cast<long long>(L.linear_history_residual.size()));
+          res.final_dual_residual = dual;
+          res.relative_dual_residual = r0 > 0 ? dual / r0 : 0;
+
+          if (!std::isfinite(dual) || !P.x.allFinite()) {
+            fail("nan", "non-finite positions or dual residual at frame " + std::to_string(frame) + ", iteration " +
+                            std::to_string(it));
+            break;
+          }
+          if (dual > divergence_factor * r0 && dual > p.atol) {
+            fail("diverged", "dual residual grew by more than 1e8 over its first value at frame " +
+                                 std::to_string(frame) + ", iteration " + std::to_string(it));
+            break;
+          }
+          if (dual <= p.rtol * r0 || dual <= p.atol) {
+            converged = true;
+            break;
+          }
+          if (it >= p.max_iterations) break;
+          if (opt.time_budget > 0 && run_clock.seconds() > opt.time_budget) {
+            fail("timeout", "time budget of " + std::to_string(opt.time_budget) + " s exceeded");
+            break;
+          }
+
+          // The method step.
+          Timer step_clock;
+          if (local) {
+            local->sweep(P.x, lambda, alpha_tilde, state);
+            last_linear = LinearStats{};
+            last_action = "";
+          } else {
+            ds.fill(state, alpha_tilde);
+            if (opt.on_system && opt.on_system(frame, sub, it, ds.A(), b)) {
+              stop = true;
+              res.message = "stopped by capture";
+              break;
+            }
+            solver->setup(ds.A(), first_setup ? SetupKind::Structure : SetupKind::Values, SetupContext{frame, sub, it});
+            first_setup = false;
+            last_action = solver->last_setup_action();
+            last_linear = solver->solve(b, dlambda);
+            if (last_linear.status == LinearStatus::breakdown) {
+              fail("breakdown", "linear solver " + method + " broke down at frame " + std::to_string(frame) +
+                                    ", iteration " + std::to_string(it) + ": " + last_linear.message);
+              break;
+            }
+            lambda += dlambda;
+            ds.apply_minv_gradT(state, dlambda, dx);
+            P.x += p.omega * dx;
+          }
+          project_colliders(prob, P.x);
+          last_step_time = step_clock.seconds();
+          ++res.outer_iterations;
+        }
+        if (stop) break;
+        if (converged)
+          ++res.substeps_converged;
+        else
+          any_max_iterations = true;
+        project_colliders(prob, P.x);
+        P.v = (P.x - x_old) / h;
+      }
+      if (!stop && opt.on_frame) opt.on_frame(frame, P.x);
+    }
+  } catch (const std::exception& e) {
+    fail("error", e.what());
+  }
+  if (res.status == "ok" && any_max_iterations) {
+    res.status = "max_iterations";
+    res.message = std::to_string(res.substeps_total - res.substeps_converged) + " of " +
+                  std::to_string(res.substeps_total) + " substeps stopped at max_iterations";
+  }
+  res.wall_time = run_clock.seconds();
+  if (solver) {
+    res.stats = solver->statistics();
+    res.arrays = solver->array_statistics();
+  }
+  if (local && method == "xpbd-gs") res.stats["colors"] = local->num_colors();
+  if (local && method == "xpbd-jacobi") res.stats["jacobi_relaxation_used"] = local->relaxation();
+  res.stats["rows"] = m;
+  res.stats["nonzeros"] = static_cast<double>(ds.A().nonZeros());
+  res.stats["particles"] = P.size();
+  res.final_positions = P.x;
+  return res;
+}
+
+}  // namespace xb

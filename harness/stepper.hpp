@@ -1,0 +1,68 @@
+// The stepper: Algorithm 4 of the supplemental, with any method in the inner step.
+//   per substep: v += h·g; x̃ = x + h·v; x = x̃; λ = 0
+//     repeat: C, ∇C at x → dual residual ‖C + α̃λ‖ (logged) → stop? → method step
+//             (local sweep, or A Δλ = b with b = −(C + α̃λ); λ += Δλ; x += ω M⁻¹∇CᵀΔλ)
+//             → collisions (if the scene has colliders)
+//     v = (x − x_old)/h
+// A failed run is a result (its status), never a crash.
+#pragma once
+
+#include "../problems/params.hpp"
+#include "../problems/problem.hpp"
+#include "../problems/sparse.hpp"
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace xb {
+
+// Per outer iteration: one entry each time the dual residual is evaluated (iteration 0 is the
+// predicted state, before any step). The linear_* entries describe the step that *led* to this
+// state (zero at iteration 0 and for local methods).
+struct IterationLog {
+  std::vector<long long> frame, substep, iteration;
+  std::vector<double> dual_residual;           // ‖C + α̃λ‖₂
+  std::vector<double> relative_dual_residual;  // over the substep's iteration 0
+  std::vector<double> primal_residual;         // ‖M(x − x̃) − ∇Cᵀλ‖₂ over free particles
+  std::vector<double> energy;                  // ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) (α > 0)
+  std::vector<double> wall_time;               // s since the substep began
+  std::vector<double> step_time;               // s in the method step (assembly + setup + solve, or sweep)
+  std::vector<long long> linear_iterations;
+  std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
+  std::vector<std::string> linear_setup_action;
+  // Residual histories of every linear solve, concatenated; solve k of entry i owns
+  // [linear_history_offset[i], linear_history_offset[i+1]).
+  std::vector<double> linear_history_residual, linear_history_time;
+  std::vector<long long> linear_history_offset{0};
+};
+
+struct RunResult {
+  std::string status = "ok";  // ok | max_iterations | diverged | nan | breakdown | timeout | error
+  std::string message;
+  IterationLog log;
+  long long outer_iterations = 0;   // method steps over all substeps
+  double final_dual_residual = 0;   // of the last evaluation
+  double relative_dual_residual = 0;
+  double wall_time = 0;             // s, the whole run
+  int substeps_converged = 0, substeps_total = 0;
+  std::map<std::string, double> stats;                     // solver statistics (+ run extras)
+  std::map<std::string, std::vector<double>> arrays;       // per-level and similar arrays
+  Eigen::Matrix3Xd final_positions;
+};
+
+struct RunOptions {
+  double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
+  // Called with the dual system of every global outer iteration before it is solved;
+  // returning true ends the run (used by `capture`).
+  std::function<bool(int frame, int substep, int iteration, const SparseMatrix& A, const Vector& b)> on_system;
+  // Called after every frame with the positions (for mesh output).
+  std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
+};
+
+// Runs `method` (a name from methods()) on a copy of `prob`. Never throws for a numerical
+// failure; throws xb::Error for a bad method name.
+RunResult run_simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt = {});
+
+}  // namespace xb

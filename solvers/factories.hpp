@@ -1,0 +1,10 @@
+// Constructors of the linear solvers, used by the registry (solvers/registry.cpp).
+#pragma once
+
+#include "linear_solver.hpp"
+
+namespace xb {
+std::unique_ptr<LinearSolver> make_cg(const Params& p);
+std::unique_ptr<LinearSolver> make_jacobi_pcg(const Params& p);
+std::unique_ptr<LinearSolver> make_cholmod(const Params& p);
+}  // namespace xb

@@ -1,0 +1,88 @@
+// The LinearSolver interface: every global method of the harness (cholmod, cg, jacobi-pcg,
+// mgpbd, hypre, muelu) solves A Δλ = b through it. Solvers see only a CSR matrix and vectors.
+#pragma once
+
+#include "../problems/sparse.hpp"
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace xb {
+
+struct Params;
+
+// What changed since the previous setup() call.
+//  Structure: a new sparsity pattern (or the first call): analyse/coarsen from scratch.
+//  Values:    same pattern, new values: a solver may reuse whatever depends only on the pattern
+//             (CHOLMOD's analysis, AMG aggregates and P, ...). It must still be correct.
+enum class SetupKind { Structure, Values };
+
+// Context of a setup() call in a simulation: lets a solver apply its lazy-setup policy
+// (e.g. mgpbd rebuilds P every amg.setup_interval frames). On the linear level frame = 0.
+struct SetupContext {
+  int frame = 0;
+  int substep = 0;
+  int iteration = 0;
+};
+
+enum class LinearStatus {
+  converged,       // ‖b − Ax‖₂ ≤ tol·‖b‖₂
+  max_iterations,  // stopped at linear.max_iterations without reaching tol
+  breakdown,       // the method broke down (not SPD, pᵀAp ≤ 0, singular factor, NaN)
+};
+const char* to_string(LinearStatus s);
+
+// One solve's statistics. residual_history[k] is ‖r_k‖₂ (k = 0 is ‖b‖₂ for a zero start) and
+// residual_time[k] the seconds since the start of solve() when it was known.
+struct LinearStats {
+  LinearStatus status = LinearStatus::converged;
+  std::string message;  // why, for breakdown
+  int iterations = 0;
+  double setup_time = 0;  // seconds in the setup() call before this solve
+  double solve_time = 0;  // seconds in solve()
+  double final_relative_residual = 0;
+  std::vector<double> residual_history;
+  std::vector<double> residual_time;
+};
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  virtual std::string name() const = 0;
+
+  // A must stay alive and unchanged until the next setup() call (solvers may keep a pointer).
+  virtual void setup(const SparseMatrix& A, SetupKind kind, const SetupContext& ctx) = 0;
+
+  // Solve A x = b from a zero initial guess to ‖r‖₂ ≤ tol·‖b‖₂ (tol = linear.tol).
+  // x is resized by the solver. Returns the statistics of this solve; setup_time is that of
+  // the setup() call that preceded it (0 if none did).
+  virtual LinearStats solve(const Vector& b, Vector& x) = 0;
+
+  // Scalar statistics of the current setup for the results (e.g. "levels",
+  // "operator_complexity", "setup_kind_structure"). Keys are HDF5 attribute names.
+  virtual std::map<std::string, double> statistics() const { return {}; }
+
+  // Per-level or other array statistics (e.g. "level_rows"). Keys are dataset names.
+  virtual std::map<std::string, std::vector<double>> array_statistics() const { return {}; }
+
+  // What the last setup() actually did ("structure", "values", "reuse", ...), for the log.
+  virtual std::string last_setup_action() const { return ""; }
+};
+
+// The registry of methods. A method is either a linear solver (global) or a local XPBD sweep.
+struct MethodInfo {
+  std::string name;
+  bool local = false;      // xpbd-jacobi, xpbd-gs: no linear system
+  bool available = true;   // false when the library was not built in
+  std::string reason;      // why it is unavailable
+  std::string description;
+};
+const std::vector<MethodInfo>& methods();
+const MethodInfo* find_method(const std::string& name);
+
+// Throws xb::Error for an unknown or unavailable name.
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const Params& p);
+
+}  // namespace xb

@@ -1,0 +1,20 @@
+// Preconditioned conjugate gradients (Algorithm 3 of the supplemental with a generic
+// preconditioner): from x₀ = 0 to ‖r‖₂ ≤ tol·‖b‖₂, logging ‖r_k‖₂ with a time stamp.
+#pragma once
+
+#include "linear_solver.hpp"
+
+#include <functional>
+
+namespace xb {
+
+// z = M⁻¹ r; must be symmetric positive definite for CG to be correct.
+using Preconditioner = std::function<void(const Vector& r, Vector& z)>;
+
+// The recurrence residual is checked against tol; on exit the true residual ‖b − Ax‖₂ is
+// recomputed and reported as final_relative_residual (so a drifted recurrence cannot
+// pass for converged). A null preconditioner means plain CG.
+LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Preconditioner& precond, double tol,
+                int max_iterations);
+
+}  // namespace xb

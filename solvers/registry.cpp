@@ -1,0 +1,61 @@
+#include "factories.hpp"
+
+#include "../problems/error.hpp"
+
+namespace xb {
+
+const char* to_string(LinearStatus s) {
+  switch (s) {
+    case LinearStatus::converged: return "converged";
+    case LinearStatus::max_iterations: return "max_iterations";
+    default: return "breakdown";
+  }
+}
+
+namespace {
+struct Entry {
+  MethodInfo info;
+  std::unique_ptr<LinearSolver> (*make)(const Params&);
+};
+
+const std::vector<Entry>& entries() {
+  static const std::vector<Entry> e = {
+      {{"xpbd-jacobi", true, true, "", "one Jacobi sweep of Eq. 10 per outer iteration (relaxed by xpbd.jacobi_relaxation)"}, nullptr},
+      {{"xpbd-gs", true, true, "", "one Gauss-Seidel sweep of Eq. 10 per outer iteration (graph-coloured, parallel)"}, nullptr},
+      {{"cholmod", false, true, "", "Goldenthal's direct solve: CHOLMOD supernodal Cholesky of the global system"}, make_cholmod},
+      {{"cg", false, true, "", "conjugate gradients on the global system"}, make_cg},
+      {{"jacobi-pcg", false, true, "", "Jacobi-preconditioned conjugate gradients on the global system"}, make_jacobi_pcg},
+  };
+  return e;
+}
+}  // namespace
+
+const std::vector<MethodInfo>& methods() {
+  static const std::vector<MethodInfo> m = [] {
+    std::vector<MethodInfo> v;
+    for (const auto& e : entries()) v.push_back(e.info);
+    return v;
+  }();
+  return m;
+}
+
+const MethodInfo* find_method(const std::string& name) {
+  for (const auto& m : methods())
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const Params& p) {
+  for (const auto& e : entries()) {
+    if (e.info.name != name) continue;
+    if (!e.info.available) throw Error("solver '" + name + "' is not available: " + e.info.reason);
+    if (!e.make) throw Error("'" + name + "' is a local method, not a linear solver");
+    return e.make(p);
+  }
+  std::string valid;
+  for (const auto& e : entries())
+    if (e.make) valid += (valid.empty() ? "" : ", ") + e.info.name;
+  throw Error("unknown linear solver '" + name + "' (valid: " + valid + ")");
+}
+
+}  // namespace xb

@@ -1,0 +1,66 @@
+#include "xpbd_local.hpp"
+
+#include <algorithm>
+
+namespace xb {
+
+LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, bool gauss_seidel)
+    : prob_(prob), ds_(ds), gs_(gauss_seidel), relaxation_(p.jacobi_relaxation) {
+  if (gs_) coloring_ = greedy_coloring(ds.A());
+  if (relaxation_ == 0) {
+    int n_max = 1;
+    const auto& start = ds.incidence_start();
+    for (int i = 0; i < prob.particles.size(); ++i)
+      if (prob.particles.w[i] > 0) n_max = std::max(n_max, start[i + 1] - start[i]);
+    relaxation_ = 1.0 / n_max;
+  }
+}
+
+void LocalMethod::sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
+                        const ConstraintState& state) {
+  const Eigen::VectorXd& w = prob_.particles.w;
+  const int nd = static_cast<int>(prob_.distance.size());
+  if (!gs_) {
+    const int m = prob_.num_constraints();
+    dlambda_.resize(m);
+#pragma omp parallel for schedule(static)
+    for (int j = 0; j < m; ++j) {
+      const auto ps = prob_.constraint_particles(j);
+      double Ajj = alpha_tilde[j];
+      for (int s = 0; s < 4; ++s)
+        if (ps[s] >= 0) Ajj += w[ps[s]] * state.grad[j][s].squaredNorm();
+      dlambda_[j] = Ajj > 0 ? relaxation_ * (-state.C[j] - alpha_tilde[j] * lambda[j]) / Ajj : 0.0;
+    }
+    lambda += dlambda_;
+    ds_.apply_minv_gradT(state, dlambda_, dx_);
+    x += dx_;
+    return;
+  }
+  for (int c = 0; c < coloring_.num_colors; ++c) {
+    const int begin = coloring_.color_start[c], end = coloring_.color_start[c + 1];
+#pragma omp parallel for schedule(static)
+    for (int q = begin; q < end; ++q) {
+      const int j = coloring_.order[q];
+      const auto ps = prob_.constraint_particles(j);
+      std::array<Eigen::Vector3d, 4> g;
+      double C;
+      if (j < nd) {
+        C = distance_constraint(x.col(ps[0]), x.col(ps[1]), prob_.distance.rest_length[j], &g[0], &g[1]);
+        g[2].setZero();
+        g[3].setZero();
+      } else {
+        C = tet_arap_constraint(x.col(ps[0]), x.col(ps[1]), x.col(ps[2]), x.col(ps[3]), prob_.tets.Dm_inv[j - nd], &g);
+      }
+      double Ajj = alpha_tilde[j];
+      for (int s = 0; s < 4; ++s)
+        if (ps[s] >= 0) Ajj += w[ps[s]] * g[s].squaredNorm();
+      if (!(Ajj > 0)) continue;
+      const double dl = (-C - alpha_tilde[j] * lambda[j]) / Ajj;
+      lambda[j] += dl;
+      for (int s = 0; s < 4; ++s)
+        if (ps[s] >= 0 && w[ps[s]] > 0) x.col(ps[s]) += w[ps[s]] * dl * g[s];
+    }
+  }
+}
+
+}  // namespace xb
