@@ -53,10 +53,12 @@ std::vector<ParamField> make_fields() {
       {"hypre.relaxation", T::String, "BoomerAMG relaxation", &Params::hypre_relaxation, 0, 0, {"l1-jacobi", "jacobi", "hgs", "l1-gs", "chebyshev"}},
       {"hypre.aggressive_levels", T::Int, "levels of aggressive coarsening", &Params::hypre_aggressive_levels, 0, 25, {}},
       {"hypre.max_levels", T::Int, "BoomerAMG maximum levels", &Params::hypre_max_levels, 1, 64, {}},
+      {"hypre.reuse", T::String, "Values setups: none (full BoomerAMG setup) | hierarchy (keep the last one until a rebuild every amg.setup_interval frames)", &Params::hypre_reuse, 0, 0, {"none", "hierarchy"}},
       {"muelu.algorithm", T::String, "unsmoothed | sa (smoothed aggregation)", &Params::muelu_algorithm, 0, 0, {"unsmoothed", "sa"}},
       {"muelu.smoother", T::String, "chebyshev | jacobi | gs | sgs", &Params::muelu_smoother, 0, 0, {"chebyshev", "jacobi", "gs", "sgs"}},
       {"muelu.smoother_sweeps", T::Int, "smoother sweeps", &Params::muelu_smoother_sweeps, 1, 100, {}},
       {"muelu.coarse_size", T::Int, "coarse size", &Params::muelu_coarse_size, 1, 1e9, {}},
+      {"muelu.reuse", T::String, "Values setups: MueLu reuse: type none | tP | RP (full rebuild every amg.setup_interval frames)", &Params::muelu_reuse, 0, 0, {"none", "tP", "RP"}},
   };
   return f;
 }

@@ -52,11 +52,13 @@ struct Params {
   std::string hypre_relaxation = "l1-jacobi";  // l1-jacobi | jacobi | hgs | l1-gs | chebyshev
   int hypre_aggressive_levels = 0;
   int hypre_max_levels = 25;
+  std::string hypre_reuse = "none";  // none | hierarchy (keep the last hierarchy for Values setups)
   // --- Trilinos MueLu ---
   std::string muelu_algorithm = "unsmoothed";  // unsmoothed | sa
   std::string muelu_smoother = "chebyshev";  // chebyshev | jacobi | gs | sgs
   int muelu_smoother_sweeps = 1;
   int muelu_coarse_size = 400;
+  std::string muelu_reuse = "RP";  // none | tP | RP: MueLu "reuse: type" for Values setups
 };
 
 // One entry of the field table.
