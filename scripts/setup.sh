@@ -8,7 +8,7 @@ DEB_PACKAGES=(
   libeigen3-dev libsuitesparse-dev libopenblas0-pthread
   libhdf5-dev libtomlplusplus-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libhypre-dev trilinos-all-dev openmpi-bin libopenmpi-dev
+  libhypre-dev trilinos-all-dev libptscotch-dev openmpi-bin libopenmpi-dev
   tetgen gmsh
 )
 PY_PACKAGES=(numpy h5py matplotlib scipy pyamg)
