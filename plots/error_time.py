@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""Error against wall time, one line per run (solver): the Pareto view.
+
+usage: python3 plots/error_time.py RESULTS.h5 [-o OUT.png] [--frame F] [--substep S] [--all]
+                                   [--absolute]
+
+Left: the relative position error ||x - x_ref||_M / ||x_ref - x~||_M (dataset position_error,
+written by `run --reference` or `reference = true` in a sweep spec); right: the relative dual
+residual (--absolute: the dual residual). Both against wall time in seconds. By default one
+substep (frame 0, substep 0), whose clock starts at 0; --all concatenates every substep with a
+running clock. Runs without a reference get only the residual panel. Writes OUT (PNG) and a PDF.
+"""
+import argparse
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import xbruns  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("results")
+    ap.add_argument("-o", "--out", default=None, help="output PNG (default: beside RESULTS)")
+    ap.add_argument("--frame", type=int, default=0)
+    ap.add_argument("--substep", type=int, default=0)
+    ap.add_argument("--all", action="store_true", help="every substep, with a running clock")
+    ap.add_argument("--absolute", action="store_true", help="absolute dual residual instead of relative")
+    ap.add_argument("--title", default=None)
+    a = ap.parse_args()
+
+    runs = xbruns.load(a.results, datasets=("frame", "substep", "iteration", "dual_residual",
+                                            "relative_dual_residual", "wall_time", "position_error"))
+    runs = [r for r in runs if "dual_residual" in r["data"] and len(r["data"]["dual_residual"])]
+    if not runs:
+        sys.exit(f"{a.results}: no simulation runs with residuals")
+    have_err = any("position_error" in r["data"] for r in runs)
+    ncol = 2 if have_err else 1
+    fig, axes = plt.subplots(1, ncol, figsize=(6.2 * ncol, 4.4), squeeze=False)
+    axes = axes[0]
+    ax_err, ax_res = (axes[0], axes[1]) if have_err else (None, axes[0])
+    # A label per run: the solver, plus what was swept when several runs share a solver.
+    solvers = [r["attrs"].get("solver") for r in runs]
+    many = len(set(solvers)) < len(solvers)
+    for r in runs:
+        if a.all:
+            m = np.ones(len(r["data"]["iteration"]), dtype=bool)
+            t = xbruns.cumulative_time(r)
+        else:
+            m = xbruns.substep_mask(r, a.frame, a.substep)
+            t = np.asarray(r["data"]["wall_time"], dtype=float)
+        if not m.any():
+            continue
+        lab = xbruns.label(r) if many else str(r["attrs"].get("solver"))
+        status = r["attrs"].get("status", "")
+        if status not in ("ok", "max_iterations"):
+            lab += f" [{status}]"
+        res = np.asarray(r["data"]["dual_residual" if a.absolute else "relative_dual_residual"])[m]
+        line, = ax_res.loglog(np.maximum(t[m], 1e-6), np.maximum(res, 1e-300), label=lab, lw=1.6)
+        if ax_err is not None and "position_error" in r["data"]:
+            e = np.asarray(r["data"]["position_error"])[m]
+            ax_err.loglog(np.maximum(t[m], 1e-6), np.maximum(e, 1e-300), color=line.get_color(), label=lab, lw=1.6)
+    ax_res.set_xlabel("wall time (s)")
+    ax_res.set_ylabel("dual residual" if a.absolute else "relative dual residual")
+    ax_res.grid(True, which="both", alpha=0.3)
+    if ax_err is not None:
+        ax_err.set_xlabel("wall time (s)")
+        ax_err.set_ylabel(r"position error $\|x-x_{ref}\|_M / \|x_{ref}-\tilde x\|_M$")
+        ax_err.grid(True, which="both", alpha=0.3)
+        ax_err.legend(fontsize=8)
+    else:
+        ax_res.legend(fontsize=8)
+    scene = runs[0]["attrs"].get("scene", "")
+    where = "all substeps" if a.all else f"frame {a.frame}, substep {a.substep}"
+    fig.suptitle(a.title or f"{scene}: error against wall time ({where})")
+    fig.tight_layout()
+    xbruns.save(fig, a.out or xbruns.default_out(a.results, "error_time"))
+
+
+if __name__ == "__main__":
+    main()

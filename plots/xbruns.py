@@ -1,0 +1,155 @@
+"""Shared reading and saving for the plots/ scripts (schema: results/README.md).
+
+Every simulation run under /runs/<name> has attributes (scene, solver, status, outer_iterations,
+final_dual_residual, relative_dual_residual, wall_time, rows, every parameter by key, and for
+sweeps sweep_params/sweep_point/sweep_key) and per-entry datasets (frame, substep, iteration,
+dual_residual, relative_dual_residual, wall_time, energy, position_error with a reference, ...).
+"""
+import math
+import os
+import sys
+
+import h5py
+import numpy as np
+
+STATUS_ORDER = ["ok", "max_iterations", "timeout", "diverged", "nan", "breakdown", "error"]
+STATUS_COLOURS = {"ok": "#4caf50", "max_iterations": "#ffc107", "timeout": "#ff9800", "diverged": "#e53935",
+                  "nan": "#8e0000", "breakdown": "#8e24aa", "error": "#757575"}
+
+
+def _text(v):
+    if isinstance(v, bytes):
+        return v.decode()
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "relative_dual_residual", "wall_time"),
+         level="simulation"):
+    """A list of runs: dict(name, attrs, data) with the requested datasets that exist."""
+    if not os.path.exists(path):
+        sys.exit(f"{path}: no such file")
+    runs = []
+    try:
+        f = h5py.File(path, "r")
+    except OSError as e:
+        sys.exit(f"{path}: not a readable HDF5 file ({e})")
+    with f:
+        if "runs" not in f:
+            sys.exit(f"{path}: no /runs group (not an xpbd-bench results file?)")
+        for name, g in f["runs"].items():
+            attrs = {k: _text(v) for k, v in g.attrs.items()}
+            if level and attrs.get("level", "simulation") != level:
+                continue
+            data = {}
+            for d in datasets:
+                if d in g:
+                    a = g[d][()]
+                    if a.dtype.kind in "OS":
+                        a = np.array([_text(x) for x in a])
+                    data[d] = a
+            runs.append(dict(name=name, attrs=attrs, data=data))
+    return runs
+
+
+def cumulative_time(run):
+    """Wall time running over the whole run (each substep's clock restarts at 0)."""
+    wt = np.asarray(run["data"]["wall_time"], dtype=float)
+    it = np.asarray(run["data"]["iteration"])
+    cum = wt.copy()
+    offset = 0.0
+    starts = list(np.flatnonzero(it == 0)) + [len(wt)]
+    for s, e in zip(starts[:-1], starts[1:]):
+        cum[s:e] = wt[s:e] + offset
+        offset = cum[e - 1] if e > s else offset
+    return cum
+
+
+def substep_mask(run, frame=None, substep=None):
+    d = run["data"]
+    m = np.ones(len(d["iteration"]), dtype=bool)
+    if frame is not None:
+        m &= np.asarray(d["frame"]) == frame
+    if substep is not None:
+        m &= np.asarray(d["substep"]) == substep
+    return m
+
+
+def to_tolerance(run, tol, frame=0, substep=0):
+    """(outer iterations, seconds) until relative_dual_residual <= tol in one substep; NaNs if never."""
+    d = run["data"]
+    m = substep_mask(run, frame, substep)
+    rel = np.asarray(d["relative_dual_residual"])[m]
+    t = np.asarray(d["wall_time"], dtype=float)[m]
+    it = np.asarray(d["iteration"])[m]
+    hit = np.flatnonzero(rel <= tol)
+    if len(hit) == 0:
+        return math.nan, math.nan
+    return float(it[hit[0]]), float(t[hit[0]])
+
+
+def value_at_iteration(run, key, iteration, frame=0, substep=0):
+    """A dataset's value at an outer iteration of one substep (the last one if it stopped earlier)."""
+    d = run["data"]
+    m = substep_mask(run, frame, substep)
+    v = np.asarray(d[key])[m]
+    it = np.asarray(d["iteration"])[m]
+    if len(v) == 0:
+        return math.nan
+    k = np.flatnonzero(it <= iteration)
+    return float(v[k[-1]]) if len(k) else math.nan
+
+
+def as_number(v):
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def swept(run):
+    """The run's swept keys (sweep_params) and their values, in order."""
+    keys = [k for k in str(run["attrs"].get("sweep_params", "")).split(",") if k]
+    return {k: run["attrs"].get(k) for k in keys}
+
+
+def label(run, keys=None):
+    a = run["attrs"]
+    s = str(a.get("solver", "?"))
+    keys = keys if keys is not None else list(swept(run))
+    extra = " ".join(f"{k}={fmt(a.get(k))}" for k in keys)
+    return f"{s} {extra}".strip()
+
+
+def fmt(v):
+    if isinstance(v, float):
+        return f"{v:.3g}"
+    return str(v)
+
+
+def default_out(results, suffix):
+    base = os.path.splitext(results)[0]
+    return f"{base}_{suffix}.png"
+
+
+def save(fig, out):
+    """Writes OUT as PNG and the same figure as PDF beside it."""
+    d = os.path.dirname(out)
+    if d:
+        os.makedirs(d, exist_ok=True)
+    root = os.path.splitext(out)[0]
+    fig.savefig(root + ".png", dpi=150, bbox_inches="tight")
+    fig.savefig(root + ".pdf", bbox_inches="tight")
+    print(f"wrote {root}.png and {root}.pdf")
+
+
+def linear_fit(x, y):
+    """Least-squares y = a x + b and R²."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    a, b = np.polyfit(x, y, 1)
+    ss_res = float(np.sum((y - (a * x + b)) ** 2))
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    r2 = 1.0 - ss_res / ss_tot if ss_tot > 0 else 1.0
+    return float(a), float(b), r2
