@@ -2,6 +2,7 @@
 
 #include "../problems/error.hpp"
 #include "../problems/scene.hpp"
+#include "../solvers/distributed.hpp"
 #include "../solvers/linear_solver.hpp"
 
 #include <omp.h>
@@ -51,6 +52,9 @@ std::vector<std::string> parse_methods(const std::string& list, bool linear_only
       throw Error("unknown solver '" + n + "' (valid: " + valid + ")");
     }
     if (!m->available) throw Error("solver '" + n + "' is not available: " + m->reason);
+    if (mpi_size() > 1 && !method_is_distributed(n))
+      throw Error("solver '" + n + "' cannot run distributed (this is an MPI run with " + std::to_string(mpi_size()) +
+                  " processes; only hypre and muelu can): run it without mpirun");
   }
   return names;
 }

@@ -3,6 +3,7 @@
 #include "commands.hpp"
 
 #include "../problems/error.hpp"
+#include "../solvers/distributed.hpp"
 
 #include <mpi.h>
 
@@ -31,6 +32,13 @@ void usage(std::ostream& os) {
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
+  // Under mpirun, ranks > 0 only serve the distributed solvers (hypre, muelu) of rank 0.
+  if (xb::mpi_rank() > 0) {
+    const int wrc = xb::serve_workers();
+    xb::finalize_external_libraries();
+    MPI_Finalize();
+    return wrc;
+  }
   int rc = 0;
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     usage(argc < 2 ? std::cerr : std::cout);
@@ -55,6 +63,8 @@ int main(int argc, char** argv) {
       }
     }
   }
+  xb::stop_workers();
+  xb::finalize_external_libraries();
   MPI_Finalize();
   return rc;
 }

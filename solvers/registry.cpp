@@ -25,6 +25,16 @@ const std::vector<Entry>& entries() {
       {{"cholmod", false, true, "", "Goldenthal's direct solve: CHOLMOD supernodal Cholesky of the global system"}, make_cholmod},
       {{"cg", false, true, "", "conjugate gradients on the global system"}, make_cg},
       {{"jacobi-pcg", false, true, "", "Jacobi-preconditioned conjugate gradients on the global system"}, make_jacobi_pcg},
+#ifdef XB_WITH_HYPRE
+      {{"hypre", false, true, "", "hypre BoomerAMG-preconditioned PCG (MPI: rows in contiguous blocks)"}, make_hypre},
+#else
+      {{"hypre", false, false, "built without hypre (XB_WITH_HYPRE=OFF or hypre not found)", "hypre BoomerAMG-PCG"}, nullptr},
+#endif
+#ifdef XB_WITH_MUELU
+      {{"muelu", false, true, "", "Trilinos MueLu-preconditioned Belos CG on Tpetra (MPI: rows in contiguous blocks)"}, make_muelu},
+#else
+      {{"muelu", false, false, "built without Trilinos MueLu (XB_WITH_MUELU=OFF or MueLu/Belos/Tpetra not found)", "Trilinos MueLu-CG"}, nullptr},
+#endif
   };
   return e;
 }

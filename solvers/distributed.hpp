@@ -1,0 +1,74 @@
+// MPI plumbing for the solvers that run distributed (hypre, muelu).
+//
+// Rank 0 runs the whole harness (scenes, assembly, the other solvers, results). A distributed
+// solver on rank 0 is a DistributedSolver: it splits the rows of A into contiguous blocks, one
+// per rank, broadcasts a command (create / setup / solve / destroy) and scatters the blocks;
+// ranks > 0 sit in serve_workers() and run the same DistributedKernel code on their block.
+// With one process nothing is sent: the kernel gets the whole matrix.
+#pragma once
+
+#include "linear_solver.hpp"
+
+#include <mpi.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace xb {
+
+int mpi_rank();
+int mpi_size();
+
+// First row of each rank's block: offsets[r] .. offsets[r+1]-1 (offsets.size() = nranks + 1).
+std::vector<long long> contiguous_rows(long long n, int nranks);
+
+// Rows [first, first + rows()) of an n_global × n_global matrix, CSR with global column indices.
+struct RowBlock {
+  long long n_global = 0;
+  long long first = 0;
+  std::vector<int> rowptr{0};
+  std::vector<long long> cols;
+  std::vector<double> vals;
+  int rows() const { return static_cast<int>(rowptr.size()) - 1; }
+};
+
+// The part of a distributed solver that every rank runs on its row block. All calls are
+// collective over MPI_COMM_WORLD. Statistics are only used on rank 0.
+class DistributedKernel {
+ public:
+  virtual ~DistributedKernel() = default;
+  // kind == Values: same pattern as the previous call, only A.vals differ.
+  virtual void setup(const RowBlock& A, SetupKind kind, const SetupContext& ctx) = 0;
+  // b and x are this rank's blocks (x is written). Zero initial guess. The returned
+  // residual_history is the global one (all ranks get the same numbers).
+  virtual LinearStats solve(const std::vector<double>& b, std::vector<double>& x) = 0;
+  virtual std::map<std::string, double> statistics() const { return {}; }
+  virtual std::map<std::string, std::vector<double>> array_statistics() const { return {}; }
+  virtual std::string last_setup_action() const { return ""; }
+};
+
+// Whether a method can run with more than one MPI process (hypre, muelu).
+bool method_is_distributed(const std::string& name);
+
+// Kernel constructors (solvers/hypre.cpp, solvers/muelu.cpp), only when built in.
+std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p);
+std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p);
+
+// The library options a Params maps to (for tests and the README table): BoomerAMG's integer
+// codes ("coarsen_type", "interp_type", "relax_type", ...) and MueLu's parameter list as text.
+std::map<std::string, double> hypre_options(const Params& p);
+std::string muelu_parameter_text(const Params& p);
+
+// Rank 0: a LinearSolver that drives the kernel `name` on all ranks.
+std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, const Params& p);
+
+// Ranks > 0: serve rank 0's commands until it sends quit. Returns the exit code.
+int serve_workers();
+// Rank 0: release the workers (call once, before MPI_Finalize; no-op with one process).
+void stop_workers();
+// Every rank, before MPI_Finalize: finalize library runtimes that were started (Kokkos).
+void finalize_external_libraries();
+
+}  // namespace xb

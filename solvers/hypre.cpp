@@ -1,0 +1,338 @@
+// hypre: BoomerAMG (one V-cycle) as the preconditioner of hypre's ParCSR PCG, on the rows of
+// this rank (contiguous blocks, see distributed.hpp).
+//
+// Stopping test: HYPRE_PCGSetTwoNorm(1) makes PCG stop on ‖r‖₂ ≤ tol·‖b‖₂ (its default is the
+// C-norm <C r, r>); absolute tolerance 0; zero initial guess.
+// Residual history: BoomerAMG is wrapped in our own preconditioner callback, which PCG calls with
+// the current (recurrence) residual r_j of every iteration; the callback records ‖r_j‖₂ (one
+// extra inner product per iteration) and the time since the start of the solve, then runs the
+// V-cycle. The last entry is PCG's final recurrence norm (GetFinalRelativeResidualNorm·‖b‖₂)
+// unless PCG already preconditioned that residual.
+// Lazy setup: hypre 2.26 cannot refresh a BoomerAMG hierarchy for new values. hypre.reuse =
+// none rebuilds it on every setup() ("structure"/"values" = full BoomerAMGSetup); hierarchy keeps
+// the last hierarchy as the preconditioner of the new matrix (PCG and the finest-level smoother
+// use the new A; coarse levels, interpolation and smoother weights are stale) until a Structure
+// setup or amg.setup_interval frames have passed ("reuse-hierarchy").
+#include "distributed.hpp"
+#include "timer.hpp"
+
+#include "../problems/error.hpp"
+#include "../problems/params.hpp"
+
+#include <HYPRE.h>
+#include <HYPRE_krylov.h>
+#include <HYPRE_parcsr_ls.h>
+#include <_hypre_parcsr_ls.h>
+
+#include <cmath>
+#include <mutex>
+
+namespace xb {
+
+namespace {
+
+int coarsen_type(const std::string& s) {
+  if (s == "Falgout") return 6;
+  if (s == "PMIS") return 8;
+  if (s == "HMIS") return 10;
+  throw Error("hypre.coarsening: unknown '" + s + "' (valid: HMIS, PMIS, Falgout)");
+}
+
+int interp_type(const std::string& s) {
+  if (s == "classical") return 0;
+  if (s == "direct") return 3;
+  if (s == "multipass") return 4;
+  if (s == "ext+i") return 6;
+  throw Error("hypre.interpolation: unknown '" + s + "' (valid: ext+i, classical, direct, multipass)");
+}
+
+// Every choice is symmetric (PCG needs a symmetric preconditioner).
+int relax_type(const std::string& s) {
+  if (s == "jacobi") return 0;      // weighted Jacobi (hypre's weight 1)
+  if (s == "hgs") return 6;         // hybrid symmetric Gauss-Seidel
+  if (s == "l1-gs") return 8;       // l1-scaled hybrid symmetric Gauss-Seidel
+  if (s == "chebyshev") return 16;  // Chebyshev
+  if (s == "l1-jacobi") return 18;  // l1-scaled Jacobi
+  throw Error("hypre.relaxation: unknown '" + s + "' (valid: l1-jacobi, jacobi, hgs, l1-gs, chebyshev)");
+}
+
+void check(HYPRE_Int err, const char* what) {
+  if (err && !(err & HYPRE_ERROR_CONV)) {
+    HYPRE_ClearAllErrors();
+    throw Error(std::string("hypre: ") + what + " failed (error " + std::to_string(err) + ")");
+  }
+}
+
+// What our preconditioner callback needs: the BoomerAMG solver and where to log.
+struct LoggedAmg {
+  HYPRE_Solver amg = nullptr;
+  Timer clock;
+  std::vector<double> norms, times;
+};
+
+HYPRE_Int logged_amg_solve(HYPRE_Solver self, HYPRE_ParCSRMatrix A, HYPRE_ParVector r, HYPRE_ParVector z) {
+  auto* L = reinterpret_cast<LoggedAmg*>(self);
+  HYPRE_Real rr = 0;
+  HYPRE_ParVectorInnerProd(r, r, &rr);
+  L->norms.push_back(std::sqrt(rr));
+  L->times.push_back(L->clock.seconds());
+  return HYPRE_BoomerAMGSolve(L->amg, A, r, z);
+}
+
+// The hierarchy is built explicitly in setup(); PCG's setup must not rebuild it.
+HYPRE_Int no_setup(HYPRE_Solver, HYPRE_ParCSRMatrix, HYPRE_ParVector, HYPRE_ParVector) { return 0; }
+
+class HypreKernel final : public DistributedKernel {
+ public:
+  explicit HypreKernel(const Params& p) : p_(p) {
+    static std::once_flag once;
+    std::call_once(once, [] { HYPRE_Init(); });
+    // Validate the choices now (on every rank), not at the first setup.
+    coarsen_type(p.hypre_coarsening);
+    interp_type(p.hypre_interpolation);
+    relax_type(p.hypre_relaxation);
+    if (p.hypre_reuse != "none" && p.hypre_reuse != "hierarchy")
+      throw Error("hypre.reuse: unknown '" + p.hypre_reuse + "' (valid: none, hierarchy)");
+  }
+  ~HypreKernel() override {
+    destroy_pcg();
+    destroy_amg();
+    if (ij_amg_ == ij_) ij_amg_ = nullptr;
+    destroy_matrix(ij_);
+    destroy_matrix(ij_amg_);
+    destroy_vectors();
+  }
+
+  void setup(const RowBlock& blk, SetupKind kind, const SetupContext& ctx) override {
+    const HYPRE_BigInt lo = static_cast<HYPRE_BigInt>(blk.first);
+    const HYPRE_BigInt hi = static_cast<HYPRE_BigInt>(blk.first + blk.rows() - 1);
+    n_local_ = blk.rows();
+    destroy_pcg();  // it refers to the previous matrix
+    const bool rebuild = kind == SetupKind::Structure || !amg_ || p_.hypre_reuse == "none" ||
+                         ctx.frame >= built_frame_ + p_.amg_setup_interval || ctx.frame < built_frame_;
+    // The matrix the hierarchy was built from stays alive while the hierarchy is in use.
+    if (ij_ && ij_ != ij_amg_) destroy_matrix(ij_);
+    ij_ = nullptr;
+    HYPRE_IJMatrix ij;
+    check(HYPRE_IJMatrixCreate(MPI_COMM_WORLD, lo, hi, lo, hi, &ij), "IJMatrixCreate");
+    HYPRE_IJMatrixSetObjectType(ij, HYPRE_PARCSR);
+    std::vector<HYPRE_Int> ncols(n_local_);
+    std::vector<HYPRE_BigInt> rows(n_local_), cols(blk.cols.begin(), blk.cols.end());
+    for (int i = 0; i < n_local_; ++i) {
+      ncols[i] = blk.rowptr[i + 1] - blk.rowptr[i];
+      rows[i] = lo + i;
+    }
+    if (n_local_) HYPRE_IJMatrixSetRowSizes(ij, ncols.data());
+    check(HYPRE_IJMatrixInitialize(ij), "IJMatrixInitialize");
+    if (n_local_)
+      check(HYPRE_IJMatrixSetValues(ij, n_local_, ncols.data(), rows.data(), cols.data(), blk.vals.data()),
+            "IJMatrixSetValues");
+    check(HYPRE_IJMatrixAssemble(ij), "IJMatrixAssemble");
+    ij_ = ij;
+    void* obj = nullptr;
+    HYPRE_IJMatrixGetObject(ij_, &obj);
+    A_ = static_cast<HYPRE_ParCSRMatrix>(obj);
+
+    if (!b_ || lo != lo_ || hi != hi_) {
+      destroy_vectors();
+      lo_ = lo;
+      hi_ = hi;
+      make_vector(b_ij_, b_);
+      make_vector(x_ij_, x_);
+    }
+
+    if (rebuild) {
+      destroy_amg();
+      if (ij_amg_ && ij_amg_ != ij_) destroy_matrix(ij_amg_);
+      ij_amg_ = ij_;
+      build_amg();
+      built_frame_ = ctx.frame;
+      action_ = kind == SetupKind::Structure ? "structure" : "values";
+      ++full_setups_;
+    } else {
+      action_ = "reuse-hierarchy";
+      ++reused_setups_;
+    }
+    // PCG is cheap to set up; a fresh one per matrix keeps its work vectors and matvec current.
+    HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &pcg_);
+    HYPRE_PCGSetTol(pcg_, p_.linear_tol);
+    HYPRE_PCGSetAbsoluteTol(pcg_, 0.0);
+    HYPRE_PCGSetTwoNorm(pcg_, 1);  // stop on ‖r‖₂/‖b‖₂, not the C-norm
+    HYPRE_PCGSetMaxIter(pcg_, p_.linear_max_iterations);
+    HYPRE_PCGSetPrintLevel(pcg_, 0);
+    HYPRE_PCGSetLogging(pcg_, 1);
+    logged_.amg = amg_;
+    HYPRE_ParCSRPCGSetPrecond(pcg_, logged_amg_solve, no_setup, reinterpret_cast<HYPRE_Solver>(&logged_));
+    check(HYPRE_ParCSRPCGSetup(pcg_, A_, b_, x_), "PCGSetup");
+  }
+
+  LinearStats solve(const std::vector<double>& b, std::vector<double>& x) override {
+    LinearStats st;
+    if (!pcg_) throw Error("hypre: solve() before setup()");
+    set_vector(b_ij_, b.data());
+    std::vector<double> zero(n_local_, 0.0);
+    set_vector(x_ij_, zero.data());
+    double bb_local = 0;
+    for (double v : b) bb_local += v * v;
+    double bb = 0;
+    MPI_Allreduce(&bb_local, &bb, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    const double bnorm = std::sqrt(bb);
+    logged_.norms.clear();
+    logged_.times.clear();
+    logged_.clock.reset();
+    x.assign(n_local_, 0.0);
+    if (bnorm == 0) {
+      st.residual_history = {0.0};
+      st.residual_time = {0.0};
+      return st;
+    }
+    const HYPRE_Int err = HYPRE_ParCSRPCGSolve(pcg_, A_, b_, x_);
+    const double t_end = logged_.clock.seconds();
+    HYPRE_ClearAllErrors();
+    HYPRE_Int iters = 0;
+    HYPRE_Real rel = 0;
+    HYPRE_ParCSRPCGGetNumIterations(pcg_, &iters);
+    HYPRE_ParCSRPCGGetFinalRelativeResidualNorm(pcg_, &rel);
+    if (n_local_) {
+      std::vector<HYPRE_BigInt> idx(n_local_);
+      for (int i = 0; i < n_local_; ++i) idx[i] = lo_ + i;
+      HYPRE_IJVectorGetValues(x_ij_, n_local_, idx.data(), x.data());
+    }
+    st.iterations = iters;
+    st.residual_history = logged_.norms;
+    st.residual_time = logged_.times;
+    if (static_cast<int>(st.residual_history.size()) <= iters) {
+      st.residual_history.push_back(rel * bnorm);
+      st.residual_time.push_back(t_end);
+    }
+    if (!std::isfinite(rel)) {
+      st.status = LinearStatus::breakdown;
+      st.message = "hypre PCG: residual is not finite";
+    } else if (rel <= p_.linear_tol) {
+      st.status = LinearStatus::converged;
+    } else if (iters >= p_.linear_max_iterations) {
+      st.status = LinearStatus::max_iterations;
+    } else {
+      st.status = LinearStatus::breakdown;
+      st.message = "hypre PCG stopped early (error " + std::to_string(err) + ") at relative residual " +
+                   std::to_string(rel);
+    }
+    return st;
+  }
+
+  std::map<std::string, double> statistics() const override {
+    return {{"levels", levels_},
+            {"operator_complexity", op_complexity_},
+            {"grid_complexity", grid_complexity_},
+            {"setup_full", static_cast<double>(full_setups_)},
+            {"setup_reused", static_cast<double>(reused_setups_)}};
+  }
+  std::map<std::string, std::vector<double>> array_statistics() const override {
+    return {{"level_rows", level_rows_}, {"level_nnz", level_nnz_}};
+  }
+  std::string last_setup_action() const override { return action_; }
+
+ private:
+  void build_amg() {
+    HYPRE_BoomerAMGCreate(&amg_);
+    HYPRE_BoomerAMGSetPrintLevel(amg_, 0);
+    HYPRE_BoomerAMGSetMaxIter(amg_, 1);  // one V-cycle per application
+    HYPRE_BoomerAMGSetTol(amg_, 0.0);
+    // The options come from the one mapping table (hypre_options) that the tests check.
+    const auto o = hypre_options(p_);
+    auto opt = [&](const char* k) { return static_cast<HYPRE_Int>(o.at(k)); };
+    HYPRE_BoomerAMGSetCoarsenType(amg_, opt("coarsen_type"));
+    HYPRE_BoomerAMGSetInterpType(amg_, opt("interp_type"));
+    HYPRE_BoomerAMGSetRelaxType(amg_, opt("relax_type"));
+    HYPRE_BoomerAMGSetCycleRelaxType(amg_, opt("coarsest_relax_type"), 3);  // Gaussian elimination
+    HYPRE_BoomerAMGSetNumSweeps(amg_, opt("num_sweeps"));
+    HYPRE_BoomerAMGSetStrongThreshold(amg_, o.at("strong_threshold"));
+    HYPRE_BoomerAMGSetAggNumLevels(amg_, opt("agg_num_levels"));
+    HYPRE_BoomerAMGSetMaxLevels(amg_, opt("max_levels"));
+    check(HYPRE_BoomerAMGSetup(amg_, A_, b_, x_), "BoomerAMGSetup");
+    // Complexities (collective: every rank computes them, rank 0 reports).
+    auto* data = reinterpret_cast<hypre_ParAMGData*>(amg_);
+    const int nl = hypre_ParAMGDataNumLevels(data);
+    hypre_ParCSRMatrix** As = hypre_ParAMGDataAArray(data);
+    level_rows_.assign(nl, 0);
+    level_nnz_.assign(nl, 0);
+    double rows = 0, nnz = 0;
+    for (int l = 0; l < nl; ++l) {
+      hypre_ParCSRMatrixSetNumNonzeros(As[l]);
+      level_rows_[l] = static_cast<double>(hypre_ParCSRMatrixGlobalNumRows(As[l]));
+      level_nnz_[l] = static_cast<double>(hypre_ParCSRMatrixNumNonzeros(As[l]));
+      rows += level_rows_[l];
+      nnz += level_nnz_[l];
+    }
+    levels_ = nl;
+    op_complexity_ = nl && level_nnz_[0] > 0 ? nnz / level_nnz_[0] : 0;
+    grid_complexity_ = nl && level_rows_[0] > 0 ? rows / level_rows_[0] : 0;
+  }
+
+  void make_vector(HYPRE_IJVector& ij, HYPRE_ParVector& v) {
+    HYPRE_IJVectorCreate(MPI_COMM_WORLD, lo_, hi_, &ij);
+    HYPRE_IJVectorSetObjectType(ij, HYPRE_PARCSR);
+    HYPRE_IJVectorInitialize(ij);
+    HYPRE_IJVectorAssemble(ij);
+    void* obj = nullptr;
+    HYPRE_IJVectorGetObject(ij, &obj);
+    v = static_cast<HYPRE_ParVector>(obj);
+  }
+  void set_vector(HYPRE_IJVector ij, const double* vals) {
+    if (!n_local_) return;
+    std::vector<HYPRE_BigInt> idx(n_local_);
+    for (int i = 0; i < n_local_; ++i) idx[i] = lo_ + i;
+    HYPRE_IJVectorSetValues(ij, n_local_, idx.data(), vals);
+  }
+  void destroy_vectors() {
+    if (b_ij_) HYPRE_IJVectorDestroy(b_ij_);
+    if (x_ij_) HYPRE_IJVectorDestroy(x_ij_);
+    b_ij_ = x_ij_ = nullptr;
+    b_ = x_ = nullptr;
+  }
+  void destroy_pcg() {
+    if (pcg_) HYPRE_ParCSRPCGDestroy(pcg_);
+    pcg_ = nullptr;
+  }
+  void destroy_amg() {
+    if (amg_) HYPRE_BoomerAMGDestroy(amg_);
+    amg_ = nullptr;
+  }
+  static void destroy_matrix(HYPRE_IJMatrix& m) {
+    if (m) HYPRE_IJMatrixDestroy(m);
+    m = nullptr;
+  }
+
+  Params p_;
+  int n_local_ = 0;
+  HYPRE_BigInt lo_ = -1, hi_ = -1;
+  HYPRE_IJMatrix ij_ = nullptr, ij_amg_ = nullptr;  // current matrix, matrix of the hierarchy
+  HYPRE_ParCSRMatrix A_ = nullptr;
+  HYPRE_IJVector b_ij_ = nullptr, x_ij_ = nullptr;
+  HYPRE_ParVector b_ = nullptr, x_ = nullptr;
+  HYPRE_Solver amg_ = nullptr, pcg_ = nullptr;
+  LoggedAmg logged_;
+  int built_frame_ = 0;
+  std::string action_;
+  long long full_setups_ = 0, reused_setups_ = 0;
+  double levels_ = 0, op_complexity_ = 0, grid_complexity_ = 0;
+  std::vector<double> level_rows_, level_nnz_;
+};
+
+}  // namespace
+
+std::map<std::string, double> hypre_options(const Params& p) {
+  return {{"coarsen_type", coarsen_type(p.hypre_coarsening)},
+          {"interp_type", interp_type(p.hypre_interpolation)},
+          {"relax_type", relax_type(p.hypre_relaxation)},
+          {"coarsest_relax_type", 9},
+          {"strong_threshold", p.amg_strength_threshold},
+          {"agg_num_levels", p.hypre_aggressive_levels},
+          {"max_levels", p.hypre_max_levels},
+          {"num_sweeps", 1},
+          {"pcg_two_norm", 1}};
+}
+
+std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p) { return std::make_unique<HypreKernel>(p); }
+
+}  // namespace xb

@@ -1,0 +1,302 @@
+// Trilinos: MueLu (aggregation AMG, one V-cycle) as the left preconditioner of Belos CG on a
+// Tpetra matrix with this rank's rows. ALL Trilinos headers live in this translation unit (they
+// take long to compile).
+//
+// Stopping test: Belos::StatusTestGenResNorm on the implicit (recurrence) residual, 2-norm,
+// scaled by ‖b‖₂ (NormOfRHS): ‖r‖₂ ≤ tol·‖b‖₂; zero initial guess.
+// Residual history: we drive Belos::CGIter ourselves (the CG solver managers accept no user
+// status test) with a status test that wraps the residual test: every time CG asks "converged?"
+// (once per iteration, k = 0 included) it records the implicit residual ‖r_k‖₂ the residual test
+// just computed, with the time since the start of the solve.
+// Lazy setup: MueLu's "reuse: type" (muelu.reuse). Structure setups, and Values setups once
+// amg.setup_interval frames have passed since the last full setup, build a new hierarchy
+// ("structure" / "values"); other Values setups call MueLu::ReuseTpetraPreconditioner, which for
+// RP keeps P and R and recomputes the coarse operators RAP and the smoothers ("reuse-RP"), for
+// tP keeps the tentative prolongator and redoes the rest ("reuse-tP"). muelu.reuse = none rebuilds
+// on every setup.
+#include "distributed.hpp"
+#include "timer.hpp"
+
+#include "../problems/error.hpp"
+#include "../problems/params.hpp"
+
+#include <BelosCGIter.hpp>
+#include <BelosLinearProblem.hpp>
+#include <BelosOutputManager.hpp>
+#include <BelosStatusTestCombo.hpp>
+#include <BelosStatusTestGenResNorm.hpp>
+#include <BelosStatusTestMaxIters.hpp>
+#include <BelosTpetraAdapter.hpp>
+#include <MueLu_CreateTpetraPreconditioner.hpp>
+#include <MueLu_TpetraOperator.hpp>
+#include <Teuchos_DefaultMpiComm.hpp>
+#include <Tpetra_Core.hpp>
+#include <Tpetra_CrsMatrix.hpp>
+#include <Tpetra_MultiVector.hpp>
+
+#include <cmath>
+#include <sstream>
+
+namespace xb {
+
+namespace {
+
+using SC = double;
+using Map = Tpetra::Map<>;
+using LO = Map::local_ordinal_type;
+using GO = Map::global_ordinal_type;
+using NO = Map::node_type;
+using CrsMatrix = Tpetra::CrsMatrix<SC, LO, GO, NO>;
+using MV = Tpetra::MultiVector<SC, LO, GO, NO>;
+using OP = Tpetra::Operator<SC, LO, GO, NO>;
+using Prec = MueLu::TpetraOperator<SC, LO, GO, NO>;
+using Teuchos::RCP;
+using Teuchos::rcp;
+
+bool g_tpetra_started = false;
+
+void ensure_tpetra() {
+  if (Tpetra::isInitialized()) return;
+  // MPI is already initialised by main(); Tpetra then only starts Kokkos.
+  int argc = 0;
+  char** argv = nullptr;
+  Tpetra::initialize(&argc, &argv);
+  g_tpetra_started = true;
+}
+
+// Records ‖r_k‖₂ = (relative residual of `conv`)·‖b‖₂ with a time stamp at every check.
+class HistoryTest final : public Belos::StatusTest<SC, MV, OP> {
+ public:
+  HistoryTest(RCP<Belos::StatusTestGenResNorm<SC, MV, OP>> conv, double bnorm, const Timer* clock,
+              std::vector<double>* norms, std::vector<double>* times)
+      : conv_(conv), bnorm_(bnorm), clock_(clock), norms_(norms), times_(times) {}
+  Belos::StatusType checkStatus(Belos::Iteration<SC, MV, OP>* it) override {
+    status_ = conv_->checkStatus(it);
+    const std::vector<double>* v = conv_->getTestValue();
+    norms_->push_back(v && !v->empty() ? (*v)[0] * bnorm_ : std::nan(""));
+    times_->push_back(clock_->seconds());
+    return status_;
+  }
+  Belos::StatusType getStatus() const override { return status_; }
+  void reset() override {
+    conv_->reset();
+    status_ = Belos::Undefined;
+  }
+  void print(std::ostream& os, int indent) const override { conv_->print(os, indent); }
+
+ private:
+  RCP<Belos::StatusTestGenResNorm<SC, MV, OP>> conv_;
+  double bnorm_;
+  const Timer* clock_;
+  std::vector<double>*norms_, *times_;
+  Belos::StatusType status_ = Belos::Undefined;
+};
+
+class MueLuKernel final : public DistributedKernel {
+ public:
+  explicit MueLuKernel(const Params& p) : p_(p) {
+    ensure_tpetra();
+    comm_ = rcp(new Teuchos::MpiComm<int>(MPI_COMM_WORLD));
+    params_ = make_parameters(p);
+  }
+
+  // The harness keys → MueLu parameter names (see README).
+  static Teuchos::ParameterList make_parameters(const Params& p) {
+    Teuchos::ParameterList L;
+    L.set("verbosity", "none");
+    L.set("problem: symmetric", true);
+    L.set("number of equations", 1);
+    L.set("max levels", p.amg_max_levels);
+    L.set("coarse: max size", p.muelu_coarse_size);
+    L.set("coarse: type", "KLU2");
+    if (p.muelu_algorithm != "sa" && p.muelu_algorithm != "unsmoothed")
+      throw Error("muelu.algorithm: unknown '" + p.muelu_algorithm + "' (valid: unsmoothed, sa)");
+    L.set("multigrid algorithm", p.muelu_algorithm);
+    L.set("aggregation: type", "uncoupled");
+    L.set("aggregation: drop tol", p.amg_strength_threshold);
+    L.set("repartition: enable", false);
+    if (p.muelu_reuse != "none" && p.muelu_reuse != "tP" && p.muelu_reuse != "RP")
+      throw Error("muelu.reuse: unknown '" + p.muelu_reuse + "' (valid: none, tP, RP)");
+    L.set("reuse: type", p.muelu_reuse);
+    const std::string& s = p.muelu_smoother;
+    if (s == "chebyshev") {
+      L.set("smoother: type", "CHEBYSHEV");
+      L.sublist("smoother: params").set("chebyshev: degree", p.muelu_smoother_sweeps);
+    } else if (s == "jacobi" || s == "sgs") {
+      L.set("smoother: type", "RELAXATION");
+      auto& sp = L.sublist("smoother: params");
+      sp.set("relaxation: type", s == "jacobi" ? "Jacobi" : "Symmetric Gauss-Seidel");
+      sp.set("relaxation: sweeps", p.muelu_smoother_sweeps);
+    } else if (s == "gs") {
+      // Forward sweeps before, backward after: the V-cycle stays symmetric for CG.
+      L.set("smoother: pre type", "RELAXATION");
+      L.set("smoother: post type", "RELAXATION");
+      auto& pre = L.sublist("smoother: pre params");
+      pre.set("relaxation: type", "Gauss-Seidel");
+      pre.set("relaxation: sweeps", p.muelu_smoother_sweeps);
+      auto& post = L.sublist("smoother: post params");
+      post.set("relaxation: type", "Gauss-Seidel");
+      post.set("relaxation: sweeps", p.muelu_smoother_sweeps);
+      post.set("relaxation: backward mode", true);
+    } else {
+      throw Error("muelu.smoother: unknown '" + s + "' (valid: chebyshev, jacobi, gs, sgs)");
+    }
+    return L;
+  }
+
+  void setup(const RowBlock& blk, SetupKind kind, const SetupContext& ctx) override {
+    const bool same_pattern = kind == SetupKind::Values && A_ && blk.n_global == n_global_ &&
+                              blk.first == first_ && blk.rows() == static_cast<int>(A_->getNodeNumRows());
+    if (same_pattern) {
+      A_->resumeFill();
+      for (int i = 0; i < blk.rows(); ++i) {
+        const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
+        A_->replaceGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
+                                Teuchos::ArrayView<const SC>(&blk.vals[b], e - b));
+      }
+      A_->fillComplete();
+    } else {
+      n_global_ = blk.n_global;
+      first_ = blk.first;
+      map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(blk.n_global), static_cast<size_t>(blk.rows()), 0, comm_));
+      std::vector<size_t> per_row(blk.rows());
+      for (int i = 0; i < blk.rows(); ++i) per_row[i] = blk.rowptr[i + 1] - blk.rowptr[i];
+      A_ = rcp(new CrsMatrix(map_, Teuchos::ArrayView<const size_t>(per_row.data(), per_row.size())));
+      for (int i = 0; i < blk.rows(); ++i) {
+        const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
+        A_->insertGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
+                               Teuchos::ArrayView<const SC>(&blk.vals[b], e - b));
+      }
+      A_->fillComplete();
+    }
+    const bool rebuild = !same_pattern || !prec_ || p_.muelu_reuse == "none" ||
+                         ctx.frame >= built_frame_ + p_.amg_setup_interval || ctx.frame < built_frame_;
+    if (rebuild) {
+      Teuchos::ParameterList L = params_;
+      prec_ = MueLu::CreateTpetraPreconditioner(RCP<OP>(A_), L);
+      built_frame_ = ctx.frame;
+      action_ = kind == SetupKind::Structure ? "structure" : "values";
+      ++full_setups_;
+    } else {
+      MueLu::ReuseTpetraPreconditioner(A_, *prec_);
+      action_ = "reuse-" + p_.muelu_reuse;
+      ++reused_setups_;
+    }
+    collect_statistics();
+  }
+
+  LinearStats solve(const std::vector<double>& b, std::vector<double>& x) override {
+    LinearStats st;
+    if (!A_ || !prec_) throw Error("muelu: solve() before setup()");
+    Timer clock;
+    const size_t nl = b.size();
+    RCP<MV> B = rcp(new MV(map_, 1)), X = rcp(new MV(map_, 1));  // X = 0
+    {
+      auto bv = B->getDataNonConst(0);
+      for (size_t i = 0; i < nl; ++i) bv[i] = b[i];
+    }
+    std::vector<double> nb(1);
+    B->norm2(Teuchos::ArrayView<double>(nb));
+    const double bnorm = nb[0];
+    x.assign(nl, 0.0);
+    if (bnorm == 0) {
+      st.residual_history = {0.0};
+      st.residual_time = {0.0};
+      return st;
+    }
+    auto problem = rcp(new Belos::LinearProblem<SC, MV, OP>(A_, X, B));
+    problem->setLeftPrec(prec_);
+    problem->setProblem();
+    auto conv = rcp(new Belos::StatusTestGenResNorm<SC, MV, OP>(p_.linear_tol));
+    conv->defineResForm(Belos::StatusTestGenResNorm<SC, MV, OP>::Implicit, Belos::TwoNorm);
+    conv->defineScaleForm(Belos::NormOfRHS, Belos::TwoNorm);
+    auto history = rcp(new HistoryTest(conv, bnorm, &clock, &st.residual_history, &st.residual_time));
+    auto maxit = rcp(new Belos::StatusTestMaxIters<SC, MV, OP>(p_.linear_max_iterations));
+    auto combo = rcp(new Belos::StatusTestCombo<SC, MV, OP>(Belos::StatusTestCombo<SC, MV, OP>::OR, history, maxit));
+    auto out = rcp(new Belos::OutputManager<SC>(Belos::Errors));
+    Teuchos::ParameterList cgp;
+    cgp.set("Assert Positive Definiteness", true);
+    Belos::CGIter<SC, MV, OP> cg(problem, out, combo, conv, cgp);
+    problem->setLSIndex(std::vector<int>{0});
+    Belos::CGIterationState<SC, MV> state;
+    state.R = Belos::MultiVecTraits<SC, MV>::CloneViewNonConst(
+        *Teuchos::rcp_const_cast<MV>(problem->getInitResVec()), std::vector<int>{0});
+    try {
+      cg.initializeCG(state);
+      cg.iterate();
+      st.status = conv->getStatus() == Belos::Passed ? LinearStatus::converged : LinearStatus::max_iterations;
+    } catch (const Belos::CGIterateFailure& e) {
+      st.status = LinearStatus::breakdown;
+      st.message = std::string("Belos CG: ") + e.what();
+    }
+    problem->setCurrLS();
+    st.iterations = cg.getNumIters();
+    auto xv = X->getData(0);
+    for (size_t i = 0; i < nl; ++i) x[i] = xv[i];
+    return st;
+  }
+
+  std::map<std::string, double> statistics() const override {
+    return {{"levels", levels_},
+            {"operator_complexity", op_complexity_},
+            {"grid_complexity", grid_complexity_},
+            {"setup_full", static_cast<double>(full_setups_)},
+            {"setup_reused", static_cast<double>(reused_setups_)}};
+  }
+  std::map<std::string, std::vector<double>> array_statistics() const override {
+    return {{"level_rows", level_rows_}, {"level_nnz", level_nnz_}};
+  }
+  std::string last_setup_action() const override { return action_; }
+
+ private:
+  void collect_statistics() {
+    auto H = prec_->GetHierarchy();
+    const int nl = H->GetNumLevels();
+    levels_ = nl;
+    level_rows_.assign(nl, 0);
+    level_nnz_.assign(nl, 0);
+    double rows = 0, nnz = 0;
+    for (int l = 0; l < nl; ++l) {
+      auto level = H->GetLevel(l);
+      if (!level->IsAvailable("A")) continue;
+      auto Al = level->Get<RCP<Xpetra::Matrix<SC, LO, GO, NO>>>("A");
+      level_rows_[l] = static_cast<double>(Al->getGlobalNumRows());
+      level_nnz_[l] = static_cast<double>(Al->getGlobalNumEntries());
+      rows += level_rows_[l];
+      nnz += level_nnz_[l];
+    }
+    op_complexity_ = nl && level_nnz_[0] > 0 ? nnz / level_nnz_[0] : 0;
+    grid_complexity_ = nl && level_rows_[0] > 0 ? rows / level_rows_[0] : 0;
+  }
+
+  Params p_;
+  Teuchos::ParameterList params_;
+  RCP<const Teuchos::Comm<int>> comm_;
+  RCP<const Map> map_;
+  RCP<CrsMatrix> A_;
+  RCP<Prec> prec_;
+  long long n_global_ = -1, first_ = -1;
+  int built_frame_ = 0;
+  std::string action_;
+  long long full_setups_ = 0, reused_setups_ = 0;
+  double levels_ = 0, op_complexity_ = 0, grid_complexity_ = 0;
+  std::vector<double> level_rows_, level_nnz_;
+};
+
+}  // namespace
+
+std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p) { return std::make_unique<MueLuKernel>(p); }
+
+// The MueLu parameter list a Params gives, as text (for tests and the README).
+std::string muelu_parameter_text(const Params& p) {
+  std::ostringstream os;
+  MueLuKernel::make_parameters(p).print(os);
+  return os.str();
+}
+
+void finalize_muelu_runtime() {
+  if (g_tpetra_started && Tpetra::isInitialized()) Tpetra::finalize();
+  g_tpetra_started = false;
+}
+
+}  // namespace xb
