@@ -4,7 +4,7 @@ PYTHON ?= python3
 BUILD  ?= build
 JOBS   ?= $(shell nproc)
 
-.PHONY: setup build demo test clean
+.PHONY: setup build demo test clean figures
 
 setup:
 	@bash scripts/setup.sh
@@ -18,6 +18,12 @@ demo: build
 	@mkdir -p results plots
 	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-jacobi,xpbd-gs,jacobi-pcg,cholmod --out results/demo.h5
 	$(PYTHON) plots/convergence.py results/demo.h5 -o plots/demo_convergence.png
+
+# The paper's claims (figures/*.toml; FIGURES_SIZE=paper for figures/paper/*.toml): sweeps into
+# plots/figures/data/, figures and plots/figures/summary.md. Rerunning resumes unfinished sweeps.
+FIGURES_SIZE ?= default
+figures: build
+	$(PYTHON) plots/figures.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE)
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -27,7 +27,7 @@ int cmd_list(const CommandArgs& argv) {
 
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
-            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}});
+            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--reference", false}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
   const std::string out = args.require("--out");
@@ -39,6 +39,7 @@ int cmd_run(const CommandArgs& argv) {
   RunOptions opt;
   opt.time_budget = args.get_double("--time-budget", 0);
   if (opt.time_budget < 0) throw Error("run: --time-budget must be >= 0");
+  opt.reference = args.has("--reference");  // per-substep reference and position_error
   const Problem prob = build_problem(p);
 
   int index = 0;

@@ -9,4 +9,5 @@ using CommandArgs = std::vector<std::string>;
 int cmd_list(const CommandArgs& args);
 int cmd_run(const CommandArgs& args);
 int cmd_report(const CommandArgs& args);
+int cmd_sweep(const CommandArgs& args);
 }  // namespace xb

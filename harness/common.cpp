@@ -1,6 +1,7 @@
 #include "common.hpp"
 
 #include "../problems/error.hpp"
+#include "reference.hpp"
 #include "../problems/scene.hpp"
 #include "../solvers/distributed.hpp"
 #include "../solvers/linear_solver.hpp"
@@ -8,6 +9,7 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -132,6 +134,24 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["linear_history/residual"] = L.linear_history_residual;
     r.datasets["linear_history/time"] = L.linear_history_time;
     r.datasets["linear_history/offset"] = L.linear_history_offset;
+  }
+  if (!L.reference_status.empty()) {
+    // The reference of every substep (harness/reference.hpp) and the error against it.
+    r.attrs["reference_method"] = reference_method_description();
+    double worst = 0;
+    long long unconverged = 0;
+    for (size_t i = 0; i < L.reference_status.size(); ++i) {
+      worst = std::max(worst, L.reference_relative_dual_residual[i]);
+      if (L.reference_status[i] != "converged") ++unconverged;
+    }
+    r.attrs["reference_dual_residual"] = worst;
+    r.attrs["reference_substeps_unconverged"] = unconverged;
+    r.attrs["reference_time"] = res.reference_time;
+    r.datasets["position_error"] = L.position_error;
+    r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
+    r.datasets["reference/iterations"] = L.reference_iterations;
+    r.datasets["reference/status"] = L.reference_status;
+    if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
   }
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
   r.datasets["final_positions"] = pos;

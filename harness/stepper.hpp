@@ -36,6 +36,13 @@ struct IterationLog {
   // [linear_history_offset[i], linear_history_offset[i+1]).
   std::vector<double> linear_history_residual, linear_history_time;
   std::vector<long long> linear_history_offset{0};
+  // With RunOptions::reference only: per entry ‖x − x_ref‖_M / ‖x_ref − x̃‖_M (x_ref from
+  // harness/reference.hpp, recomputed every substep from the run's own x̃), and per substep
+  // what the reference reached.
+  std::vector<double> position_error;
+  std::vector<double> reference_relative_dual_residual;
+  std::vector<long long> reference_iterations;
+  std::vector<std::string> reference_status;
 };
 
 struct RunResult {
@@ -45,7 +52,8 @@ struct RunResult {
   long long outer_iterations = 0;   // method steps over all substeps
   double final_dual_residual = 0;   // of the last evaluation
   double relative_dual_residual = 0;
-  double wall_time = 0;             // s, the whole run
+  double wall_time = 0;             // s, the whole run (without the reference's time)
+  double reference_time = 0;        // s spent on references and errors (excluded from every clock)
   int substeps_converged = 0, substeps_total = 0;
   std::map<std::string, double> stats;                     // solver statistics (+ run extras)
   std::map<std::string, std::vector<double>> arrays;       // per-level and similar arrays
@@ -54,6 +62,9 @@ struct RunResult {
 
 struct RunOptions {
   double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
+  // Solve every substep also by the reference method (harness/reference.hpp) and log the
+  // position error per outer iteration. Its time is excluded from wall_time and time_budget.
+  bool reference = false;
   // Called with the dual system of every global outer iteration before it is solved;
   // returning true ends the run (used by `capture`).
   std::function<bool(int frame, int substep, int iteration, const SparseMatrix& A, const Vector& b)> on_system;
