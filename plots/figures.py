@@ -350,16 +350,15 @@ def claim_twist(S, files, notes, out):
 
 def claim_cloth(S, files, notes, out):
     claim = "hanging cloth: XPBD stretches at the same dual residual (Fig. 8)"
-    runs = runs_of(files.get("cloth_stretch"), datasets=("final_positions",))
+    runs = runs_of(files.get("cloth_stretch"), datasets=("final_positions", "distance_edges", "distance_rest_length"))
     if not runs:
         S.not_run(claim, notes.get("cloth_stretch", "no results"))
         return
-    import cloth_stretch
     for r in runs:
         if failed(r):
             S.add(claim, f"{r['attrs'].get('solver')} max strain", "—", f"not run: {status_note(r)}")
             continue
-        s, _, _ = cloth_stretch.strains(r)
+        s, _, _ = xbruns.cloth_strains(r)
         a = r["attrs"]
         S.add(claim, f"{a.get('solver')}: max / mean edge strain after {a.get('frames')} frames "
                      f"({a.get('resolution')}², stop at dual residual {a.get('atol')})",

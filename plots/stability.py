@@ -3,7 +3,7 @@
 
 usage: python3 plots/stability.py RESULTS.h5 [-o OUT.png] [--case KEY[,KEY...]]
 
-Cases are the values of --case (default: the attribute `variant` where runs have one, else the
+Cases are the values of --case (default: the attribute `variant` where runs differ in it, else the
 swept keys of a sweep, else the scene). Each cell is coloured by status (ok, max_iterations,
 timeout, diverged, nan, breakdown, error) and shows it with the final relative dual residual;
 with repeats, the worst status is shown. Writes PNG and PDF and prints the table.
@@ -25,10 +25,11 @@ import xbruns  # noqa: E402
 def case_keys(runs, arg):
     if arg:
         return arg.split(",")
-    if any("variant" in r["attrs"] for r in runs):
+    variants = {str(r["attrs"].get("variant", "")) for r in runs}
+    if len(variants) > 1:
         return ["variant"]
     keys = list(xbruns.swept(runs[0]))
-    return keys or ["scene"]
+    return keys or (["variant"] if variants - {"", "none"} else ["scene"])
 
 
 def main():
