@@ -25,6 +25,7 @@ const std::vector<Entry>& entries() {
       {{"cholmod", false, true, "", "Goldenthal's direct solve: CHOLMOD supernodal Cholesky of the global system"}, make_cholmod},
       {{"cg", false, true, "", "conjugate gradients on the global system"}, make_cg},
       {{"jacobi-pcg", false, true, "", "Jacobi-preconditioned conjugate gradients on the global system"}, make_jacobi_pcg},
+      {{"mgpbd", false, true, "", "MGPBD: CG preconditioned by one V-cycle of in-house unsmoothed-aggregation AMG, lazy setup"}, make_mgpbd},
 #ifdef XB_WITH_HYPRE
       {{"hypre", false, true, "", "hypre BoomerAMG-preconditioned PCG (MPI: rows in contiguous blocks)"}, make_hypre},
 #else

@@ -1,0 +1,38 @@
+// Galerkin coarse operators A_c = Pᵀ A P (Eq. 27, R = Pᵀ).
+//  General path: two parallel row-wise (Gustavson) sparse products, R·(A·P); any P.
+//  One-candidate path: when P has at most one entry per row (p_i in column agg(i)),
+//    A_c[agg(i), agg(j)] = Σ p_i A_ij p_j, a weighted sum over aggregates. build() finds A_c's
+//    pattern and, per coarse non-zero, the list of fine non-zeros that add into it with their
+//    weights p_i p_j; refresh() is then one parallel gather pass over A's values (no atomics).
+#pragma once
+
+#include "../../problems/sparse.hpp"
+
+#include <vector>
+
+namespace xb::amg {
+
+// C = A·B, parallel over rows, sorted columns; structural zeros are kept (no value dropping),
+// so the pattern depends only on the patterns of A and B.
+SparseMatrix spgemm(const SparseMatrix& A, const SparseMatrix& B);
+
+// Pᵀ A P with R = Pᵀ given (the tentative prolongator builds both).
+SparseMatrix galerkin_product(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P);
+
+class AggregateGalerkin {
+ public:
+  // P: n × n_c with ≤ 1 entry per row; R = Pᵀ. Sets A_c (pattern and values) and the map.
+  // Throws xb::Error if a row of P has more than one entry.
+  void build(const SparseMatrix& A, const SparseMatrix& P, const SparseMatrix& R, SparseMatrix& Ac);
+  // A has the pattern it had in build(); rewrites A_c's values only.
+  void refresh(const SparseMatrix& A, SparseMatrix& Ac) const;
+  bool built() const { return !slot_start_.empty(); }
+
+ private:
+  std::vector<int> slot_start_;  // per coarse non-zero: its contributions [slot_start_[s], slot_start_[s+1])
+  std::vector<int> src_;         // index of the fine non-zero A_ij
+  std::vector<double> weight_;   // p_i p_j
+  long fine_nnz_ = 0;
+};
+
+}  // namespace xb::amg

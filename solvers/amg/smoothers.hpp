@@ -1,0 +1,58 @@
+// Smoothers of the V-cycle. Each one is symmetric in the sense CG needs: the post-smoother is
+// the A-adjoint of the pre-smoother, so the V-cycle is a symmetric operator.
+//  jacobi:    x += ω D⁻¹(b − Ax), ω = 1/λ_max(D⁻¹A) (the authors' 2/(λ_max+λ_min) with
+//             λ_min = λ_max). A fixed ω such as 0.72 diverges on XPBD matrices, where
+//             ρ(D⁻¹A) reaches 4–11 (shared/paper/xpbd_matrix_facts.md), so λ_max is estimated.
+//  chebyshev: degree-3 Chebyshev polynomial in D⁻¹A on [ρ/30, 1.1ρ] (the authors' cloth setting),
+//             ρ estimated per level (the authors reuse level 0's; per level is cheap and safer).
+//  gs:        multicolour Gauss–Seidel, forward sweeps before, backward sweeps after.
+// λ_max(D⁻¹A) comes from power iteration with the Rayleigh quotient in the D inner product; a
+// values-only refresh warm-starts it from the previous dominant vector.
+#pragma once
+
+#include "../../problems/sparse.hpp"
+#include "../coloring.hpp"
+
+#include <memory>
+#include <string>
+
+namespace xb::amg {
+
+// 1/A_ii (0 where A_ii ≤ 0: such a row is left alone rather than blown up).
+Vector inverse_diagonal(const SparseMatrix& A);
+
+// One multicolour Gauss–Seidel sweep on A x = b: colours in order (forward) or reversed
+// (backward); rows of one colour are independent and updated in parallel.
+void multicolor_gs_sweep(const SparseMatrix& A, const Vector& inv_diag, const Coloring& coloring, const Vector& b,
+                         Vector& x, bool forward);
+
+// Estimate of λ_max(D⁻¹A) (A SPD): `iterations` power steps from v (v is updated, so it can warm
+// start the next estimate; a zero or wrongly sized v is replaced by a seeded random vector).
+double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector& v, int iterations,
+                           unsigned seed = 1);
+
+class Smoother {
+ public:
+  virtual ~Smoother() = default;
+  virtual std::string name() const = 0;
+  // New values, same pattern: recompute the diagonal and spectral bounds.
+  virtual void refresh(const SparseMatrix& A) = 0;
+  // `sweeps` times; x_zero says x is zero on entry (saves a matrix product).
+  virtual void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) = 0;
+  virtual void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) = 0;
+  // The λ_max(D⁻¹A) estimate in use (0 for gs).
+  virtual double lambda_max() const { return 0; }
+};
+
+struct SmootherOptions {
+  std::string kind = "chebyshev";  // jacobi | chebyshev | gs
+  int sweeps = 1;
+  int power_iterations = 20;          // at setup
+  int refresh_power_iterations = 5;   // warm-started, at refresh
+  unsigned seed = 1;
+};
+
+// Throws xb::Error naming amg.smoother for an unknown kind.
+std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A);
+
+}  // namespace xb::amg
