@@ -4,7 +4,7 @@ PYTHON ?= python3
 BUILD  ?= build
 JOBS   ?= $(shell nproc)
 
-.PHONY: setup build demo test clean figures
+.PHONY: setup build demo test clean figures perf perf-baseline
 
 setup:
 	@bash scripts/setup.sh
@@ -27,6 +27,17 @@ figures: build
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# CI performance tracking (issue 7): microbenchmarks + deterministic metrics into
+# results/perf/<git-sha>.json, compared with results/baselines/perf.json; fails when an iteration
+# count (+10 %) or operator complexity (+2 %) got worse. PERF_FLAGS=--short: the CI gate's form.
+PERF_FLAGS ?=
+perf: build
+	$(PYTHON) scripts/perf.py run --build $(BUILD) $(PERF_FLAGS)
+
+# Rewrites the committed baseline on purpose (commit results/baselines/perf.json afterwards).
+perf-baseline: build
+	$(PYTHON) scripts/perf.py run --build $(BUILD) --write-baseline
 
 clean:
 	rm -rf $(BUILD)

@@ -1,0 +1,332 @@
+#!/usr/bin/env python3
+"""CI performance tracking (issue 7): run, record, compare.
+
+  perf.py run [--build DIR] [--short] [--baseline FILE] [--write-baseline] [--out FILE]
+      Runs the deterministic metrics (xb_perf_metrics) and the Google Benchmark microbenchmarks
+      (xb_microbench), writes results/perf/<git-sha>.json (benchmarks + deterministic metrics +
+      machine description) and compares it with the committed baseline
+      (results/baselines/perf.json). Exit 1 when a deterministic metric is outside its tolerance.
+      --write-baseline: also (re)write the baseline on purpose, no comparison.
+      --short: the CI gate's short form (small sizes only, short benchmark times).
+  perf.py compare BASELINE CURRENT [--all]
+      Compares two perf JSON files (or bare xb_perf_metrics outputs). Same exit code.
+
+Gate: deterministic metrics fail when worse than their tolerance: iterations and outer
+iterations +10 %, operator and grid complexity +2 %, AMG levels +10 %, a status that leaves
+converged/ok, a system whose size changed, a metric that disappeared (unless its solver is not
+available in this build). Timed metrics are read as ratios to the triad reference of the same
+run; a ratio more than 25 % above the baseline's is flagged SLOWER but does not fail.
+"""
+import argparse
+import datetime
+import json
+import os
+import platform
+import re
+import socket
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_BASELINE = os.path.join(ROOT, "results", "baselines", "perf.json")
+TRIAD_PREFIX = "triad/"
+
+# kind -> (relative tolerance on an increase, what it means)
+TOLERANCES = {
+    "iterations": 0.10,
+    "outer_iterations": 0.10,
+    "levels": 0.10,
+    "operator_complexity": 0.02,
+    "grid_complexity": 0.02,
+}
+TIME_TOLERANCE = 0.25
+GOOD_STATUS = {"converged", "ok"}
+
+
+# ---------------------------------------------------------------------------------------- run
+def sh(cmd, **kw):
+    return subprocess.run(cmd, check=True, capture_output=True, text=True, **kw).stdout.strip()
+
+
+def git_info():
+    try:
+        sha = sh(["git", "rev-parse", "--short=12", "HEAD"], cwd=ROOT)
+        dirty = bool(sh(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT))
+        subject = sh(["git", "log", "-1", "--format=%s"], cwd=ROOT)
+        when = sh(["git", "log", "-1", "--format=%cI"], cwd=ROOT)
+    except (subprocess.CalledProcessError, FileNotFoundError):
+        return {"sha": "unknown", "dirty": True, "subject": "", "commit_time": ""}
+    return {"sha": sha, "dirty": dirty, "subject": subject, "commit_time": when}
+
+
+def machine_description(build):
+    m = {
+        "hostname": socket.gethostname(),
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "python": platform.python_version(),
+        "nproc": os.cpu_count(),
+        "omp_num_threads": os.environ.get("OMP_NUM_THREADS", ""),
+    }
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    m["cpu"] = line.split(":", 1)[1].strip()
+                    break
+        with open("/proc/meminfo") as f:
+            m["memory_kib"] = int(f.readline().split()[1])
+        with open("/proc/loadavg") as f:
+            m["load_average"] = [float(v) for v in f.read().split()[:3]]
+    except OSError:
+        pass
+    cache = os.path.join(build, "CMakeCache.txt")
+    if os.path.exists(cache):
+        with open(cache) as f:
+            for line in f:
+                for key in ("CMAKE_CXX_COMPILER:", "CMAKE_BUILD_TYPE:", "CMAKE_CXX_FLAGS_RELEASE:",
+                            "XB_WITH_HYPRE:", "XB_WITH_MUELU:"):
+                    if line.startswith(key):
+                        m[key.rstrip(":").lower()] = line.split("=", 1)[1].strip()
+        if "cmake_cxx_compiler" in m:
+            try:
+                m["compiler_version"] = sh([m["cmake_cxx_compiler"], "--version"]).splitlines()[0]
+            except (subprocess.CalledProcessError, OSError):
+                pass
+    return m
+
+
+def run_metrics(build, extra_args=()):
+    exe = os.path.join(build, "xb_perf_metrics")
+    if not os.path.exists(exe):
+        sys.exit(f"perf: {exe} not found (build it: ninja -C {build} xb_perf_metrics)")
+    with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as t:
+        out = t.name
+    try:
+        r = subprocess.run([exe, "--out", out, *extra_args], cwd=ROOT, text=True, stderr=subprocess.PIPE)
+        if r.returncode != 0:
+            sys.exit(f"perf: xb_perf_metrics failed (exit {r.returncode}):\n{r.stderr[-4000:]}")
+        with open(out) as f:
+            return json.load(f)
+    finally:
+        os.unlink(out)
+
+
+def run_benchmarks(build, short, bench_filter=None):
+    exe = os.path.join(build, "xb_microbench")
+    if not os.path.exists(exe):
+        sys.exit(f"perf: {exe} not found (build it: ninja -C {build} xb_microbench)")
+    with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as t:
+        out = t.name
+    cmd = [exe, f"--benchmark_out={out}", "--benchmark_out_format=json",
+           "--xb_sizes=" + ("small" if short else "all"),
+           "--benchmark_min_time=" + ("0.05" if short else "0.3")]
+    if bench_filter:
+        cmd.append(f"--benchmark_filter={bench_filter}")
+    try:
+        # The console table goes to stderr so that it is seen as it runs.
+        r = subprocess.run(cmd, cwd=ROOT, stdout=sys.stderr)
+        if r.returncode != 0:
+            sys.exit(f"perf: xb_microbench failed (exit {r.returncode})")
+        with open(out) as f:
+            return json.load(f)
+    finally:
+        os.unlink(out)
+
+
+def timed_ratios(gbench):
+    """Benchmark real times over the triad's, per benchmark name (None without a triad)."""
+    if not gbench:
+        return {}
+    rows = [b for b in gbench.get("benchmarks", []) if b.get("run_type", "iteration") == "iteration"
+            and not b.get("error_occurred")]
+    triad = [b["real_time"] for b in rows if b["name"].startswith(TRIAD_PREFIX)]
+    if not triad:
+        return {}
+    ref = min(triad)
+    return {b["name"]: b["real_time"] / ref for b in rows if not b["name"].startswith(TRIAD_PREFIX)}
+
+
+# ---------------------------------------------------------------------------------------- compare
+def load(path):
+    with open(path) as f:
+        d = json.load(f)
+    if "deterministic" not in d and "metrics" in d:  # a bare xb_perf_metrics output
+        d = {"deterministic": d, "timed_ratios": {}}
+    return d
+
+
+def method_of(name):
+    # linear/<scene>/<res>/<capture>/<solver>/<stat>, sim/<scene>/<res>/<method>/<stat>
+    parts = name.split("/")
+    return parts[-2] if len(parts) >= 2 else ""
+
+
+def fmt(v):
+    if isinstance(v, str):
+        return v
+    if v is None:
+        return "-"
+    if float(v).is_integer() and abs(v) < 1e15:
+        return str(int(v))
+    return f"{v:.4g}"
+
+
+def compare(base, cur):
+    """Rows (metric, kind, baseline, current, change, tolerance, verdict); verdict FAIL fails."""
+    rows = []
+    bm = base["deterministic"]["metrics"]
+    cm = cur["deterministic"]["metrics"]
+    unavailable = set(cur["deterministic"].get("unavailable_methods", []))
+    for name, b in bm.items():
+        kind = b["kind"]
+        if kind == "info":
+            continue
+        if name not in cm:
+            skipped = method_of(name) in unavailable
+            rows.append((name, kind, fmt(b["value"]), "-", "", "", "skipped (unavailable)" if skipped else "FAIL missing"))
+            continue
+        bv, cv = b["value"], cm[name]["value"]
+        if kind == "status":
+            if bv == cv:
+                verdict = "ok"
+            elif bv in GOOD_STATUS and cv not in GOOD_STATUS:
+                verdict = "FAIL"
+            else:
+                verdict = "changed"
+            rows.append((name, kind, bv, cv, "", "", verdict))
+            continue
+        if kind == "size":
+            rows.append((name, kind, fmt(bv), fmt(cv), "", "exact", "ok" if bv == cv else "FAIL"))
+            continue
+        tol = TOLERANCES.get(kind)
+        if tol is None or bv is None or cv is None:
+            rows.append((name, kind, fmt(bv), fmt(cv), "", "", "ok" if bv == cv else "changed"))
+            continue
+        change = (cv - bv) / bv if bv else (0.0 if cv == bv else float("inf"))
+        if cv > bv * (1 + tol) + 1e-12:
+            verdict = "FAIL"
+        elif cv < bv * (1 - tol) - 1e-12:
+            verdict = "improved"
+        else:
+            verdict = "ok"
+        rows.append((name, kind, fmt(bv), fmt(cv), f"{change:+.1%}", f"+{tol:.0%}", verdict))
+    for name, c in cm.items():
+        if name not in bm and c["kind"] != "info":
+            rows.append((name, c["kind"], "-", fmt(c["value"]), "", "", "new"))
+    # Timed: ratio to the triad of the same run.
+    br, cr = base.get("timed_ratios", {}), cur.get("timed_ratios", {})
+    for name in cr:
+        if name not in br:
+            continue
+        change = cr[name] / br[name] - 1
+        verdict = "SLOWER (flag)" if change > TIME_TOLERANCE else ("faster" if change < -TIME_TOLERANCE else "ok")
+        rows.append((name, "time/triad", f"{br[name]:.4g}", f"{cr[name]:.4g}", f"{change:+.1%}",
+                     f"+{TIME_TOLERANCE:.0%}", verdict))
+    return rows
+
+
+def print_table(rows, show_all, out=sys.stdout):
+    shown = [r for r in rows if show_all or r[6] not in ("ok",)]
+    head = ("metric", "kind", "baseline", "current", "change", "tol", "verdict")
+    if shown:
+        w = [max(len(str(r[i])) for r in shown + [head]) for i in range(7)]
+        line = "  ".join(h.ljust(w[i]) for i, h in enumerate(head))
+        print(line, file=out)
+        print("-" * len(line), file=out)
+        for r in shown:
+            print("  ".join(str(v).ljust(w[i]) for i, v in enumerate(r)), file=out)
+    n_det = sum(1 for r in rows if r[1] != "time/triad")
+    n_time = len(rows) - n_det
+    fails = [r for r in rows if r[6].startswith("FAIL")]
+    flagged = [r for r in rows if r[6].startswith("SLOWER")]
+    print(f"\nperf gate: {n_det} deterministic metrics, {len(fails)} outside tolerance; "
+          f"{n_time} timed ratios, {len(flagged)} flagged slower (not failing)", file=out)
+    if fails:
+        print("perf gate: FAILED: " + ", ".join(r[0] for r in fails), file=out)
+    else:
+        print("perf gate: passed", file=out)
+    return 1 if fails else 0
+
+
+def solver_ratio_table(cur, out=sys.stdout):
+    """Each solver's full-solve time over the triad's, per system size."""
+    ratios = cur.get("timed_ratios", {})
+    solves = sorted(k for k in ratios if k.startswith("solve/"))
+    if not solves:
+        return
+    print("\nfull solve time / triad time (this run):", file=out)
+    for k in solves:
+        print(f"  {k:<40s} {ratios[k]:10.3f}", file=out)
+
+
+# ---------------------------------------------------------------------------------------- main
+def cmd_run(a):
+    build = os.path.abspath(a.build)
+    git = git_info()
+    det = run_metrics(build)
+    gb = run_benchmarks(build, a.short, a.filter) if not a.no_bench else None
+    record = {
+        "schema": "xpbd-bench perf 1",
+        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "git": git,
+        "short": bool(a.short),
+        "machine": machine_description(build),
+        "deterministic": det,
+        "timed_ratios": timed_ratios(gb),
+        "google_benchmark": gb,
+    }
+    out = a.out or os.path.join(ROOT, "results", "perf", f"{git['sha']}.json")
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    with open(out, "w") as f:
+        json.dump(record, f, indent=1)
+    print(f"perf: wrote {os.path.relpath(out, ROOT)}")
+    if a.write_baseline:
+        if a.short:
+            sys.exit("perf: a baseline is written from a full run, not --short")
+        os.makedirs(os.path.dirname(a.baseline), exist_ok=True)
+        with open(a.baseline, "w") as f:
+            json.dump(record, f, indent=1)
+        print(f"perf: wrote the baseline {os.path.relpath(a.baseline, ROOT)}")
+        solver_ratio_table(record)
+        return 0
+    if not os.path.exists(a.baseline):
+        sys.exit(f"perf: no baseline at {a.baseline} (make perf-baseline writes it)")
+    rows = compare(load(a.baseline), record)
+    rc = print_table(rows, a.all)
+    solver_ratio_table(record)
+    return rc
+
+
+def cmd_compare(a):
+    rows = compare(load(a.baseline), load(a.current))
+    return print_table(rows, a.all)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run", help="measure, record and compare with the baseline")
+    r.add_argument("--build", default=os.path.join(ROOT, "build"))
+    r.add_argument("--short", action="store_true", help="CI short form: small sizes, short times")
+    r.add_argument("--baseline", default=DEFAULT_BASELINE)
+    r.add_argument("--write-baseline", action="store_true")
+    r.add_argument("--out", help="default: results/perf/<git-sha>.json")
+    r.add_argument("--filter", help="Google Benchmark regex (the triad is always kept)")
+    r.add_argument("--no-bench", action="store_true", help="deterministic metrics only")
+    r.add_argument("--all", action="store_true", help="show every row, not only what changed")
+    r.set_defaults(fn=cmd_run)
+    c = sub.add_parser("compare", help="compare two perf JSON files")
+    c.add_argument("baseline")
+    c.add_argument("current")
+    c.add_argument("--all", action="store_true")
+    c.set_defaults(fn=cmd_compare)
+    a = ap.parse_args(argv)
+    if getattr(a, "filter", None):
+        a.filter = f"({a.filter})|^{re.escape(TRIAD_PREFIX)}"
+    return a.fn(a)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
