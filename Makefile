@@ -20,10 +20,11 @@ demo: build
 	$(PYTHON) plots/convergence.py results/demo.h5 -o plots/demo_convergence.png
 
 # The paper's claims (figures/*.toml; FIGURES_SIZE=paper for figures/paper/*.toml): sweeps into
-# plots/figures/data/, figures and plots/figures/summary.md. Rerunning resumes unfinished sweeps.
+# plots/figures/data/, figures and plots/figures/summary.md. Rerunning resumes unfinished sweeps;
+# FIGURES_ARGS="--fresh" starts them again, "--only squash_mgpbd,theta" selects specs.
 FIGURES_SIZE ?= default
 figures: build
-	$(PYTHON) plots/figures.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE)
+	$(PYTHON) plots/figures.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -2,7 +2,7 @@
 """`make figures`: run the sweep specs under figures/ and reproduce the paper's claims.
 
 usage: python3 plots/figures.py [--bench build/xpbd-bench] [--size default|paper] [--only a,b]
-                                [--out plots/figures] [--dry-run]
+                                [--out plots/figures] [--dry-run] [--fresh]
 
 For each spec figures/NAME.toml (--size paper: figures/paper/NAME.toml where it exists) it runs
 `xpbd-bench sweep SPEC --out OUT/data/SIZE/NAME.h5` (resumable: a rerun skips finished runs),
@@ -458,6 +458,9 @@ def main():
     ap.add_argument("--only", default="", help="comma-separated spec names (default: all)")
     ap.add_argument("--out", default=os.path.join(ROOT, "plots", "figures"))
     ap.add_argument("--dry-run", action="store_true", help="print the sweeps, summarise existing results")
+    ap.add_argument("--fresh", action="store_true",
+                    help="delete the selected specs' results first (a rerun otherwise keeps every finished run, "
+                         "failed ones included, e.g. from an older build)")
     args = ap.parse_args()
     if not os.access(args.bench, os.X_OK):
         sys.exit(f"figures: {args.bench} is not an executable (build first: make build, or --bench PATH)")
@@ -476,6 +479,10 @@ def main():
             if not files[name]:
                 notes[name] = "not selected (--only)"
             continue
+        if args.fresh:
+            p = os.path.join(args.out, "data", args.size, name + ".h5")
+            if os.path.exists(p):
+                os.remove(p)
         files[name] = run_spec(name, args, inventory, notes)
     S = Summary()
     for fn in (claim_squash, claim_scaling, claim_near_kernel, claim_setup_interval, claim_twist, claim_cloth,
