@@ -1,0 +1,151 @@
+#!/usr/bin/env bash
+# Real tet meshes for xpbd-bench, generated on demand and cached under data/meshes/ (ignored by git).
+#
+#   scripts/get_meshes.sh NAME:SIZE ...      e.g.  bunny:12k  armadillo:50k  bunny:270k
+#   scripts/get_meshes.sh --all              bunny and armadillo at 5k, 12k and 50k (270k only on request)
+#
+# NAME: bunny | armadillo. SIZE: 5k | 12k | 50k | 270k (the target tet count; the result lands
+# within about 15% of it, the exact count is in data/meshes/NAME_SIZE.log).
+#
+# Where the geometry comes from: Debian's libcgal-demo ships /usr/share/doc/libcgal-dev/data.tar.gz
+# with data/meshes/bunny00.off (the Stanford bunny, 75K faces) and data/meshes/armadillo.off
+# (52K faces), closed and free of self-intersections. `apt-get download` + `dpkg-deb --fsys-tarfile`
+# extract them without installing the package. Both are scaled to a height (y extent) of 1 m and
+# centred on the origin.
+#
+# How the tets are made: TetGen (-pq1.414 -a<max volume>, N ≈ 2·Volume/a). The full surfaces alone
+# force tens of thousands of tets, so below 90K tets the surface is first remeshed by gmsh
+# (ClassifySurfaces + CreateGeometry + a uniform 2-D mesh of size h ≈ the target's mean tet edge),
+# and tetgen keeps that surface (-Y). The max volume a is then corrected (at most 4 tetgen runs)
+# until the count is within 15% of the target. Every step is deterministic: the same tools give
+# the same mesh.
+#
+# Output: data/meshes/NAME_SIZE.node + NAME_SIZE.ele (TetGen format, read by problems/mesh_io).
+# Environment: XB_MESH_DIR overrides data/meshes.
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+out="${XB_MESH_DIR:-$root/data/meshes}"
+mkdir -p "$out/src"
+
+die() { echo "get_meshes.sh: $*" >&2; exit 1; }
+for tool in tetgen gmsh python3 dpkg-deb apt-get; do
+  command -v "$tool" >/dev/null || die "'$tool' is not installed (scripts/setup.sh installs tetgen and gmsh)"
+done
+
+# 1. The source surfaces (cached in $out/src).
+fetch_sources() {
+  [[ -s "$out/src/bunny00.off" && -s "$out/src/armadillo.off" ]] && return
+  local tmp
+  tmp="$(mktemp -d)"
+  trap 'rm -rf "$tmp"' RETURN
+  echo "get_meshes.sh: downloading libcgal-demo for bunny00.off and armadillo.off" >&2
+  (cd "$tmp" && apt-get download libcgal-demo >/dev/null 2>"$tmp/apt.err") ||
+    { cat "$tmp/apt.err" >&2; die "apt-get download libcgal-demo failed"; }
+  dpkg-deb --fsys-tarfile "$tmp"/libcgal-demo_*.deb |
+    tar -xO ./usr/share/doc/libcgal-dev/data.tar.gz |
+    tar -xz -C "$tmp" data/meshes/bunny00.off data/meshes/armadillo.off ||
+    die "data/meshes/{bunny00,armadillo}.off not found in libcgal-demo's data.tar.gz"
+  cp "$tmp/data/meshes/bunny00.off" "$tmp/data/meshes/armadillo.off" "$out/src/"
+}
+
+# OFF → scaled ASCII STL (height 1 m, centred) and its enclosed volume on stdout.
+off_to_stl() {  # src dst
+  python3 - "$1" "$2" <<'EOF'
+import sys
+import numpy as np
+src, dst = sys.argv[1], sys.argv[2]
+toks = open(src).read().split()
+if toks[0] != "OFF":
+    sys.exit(f"{src}: not an OFF file")
+nv, nf = int(toks[1]), int(toks[2])
+i = 4
+V = np.array(toks[i:i + 3 * nv], float).reshape(nv, 3)
+i += 3 * nv
+F = np.array(toks[i:i + 4 * nf], int).reshape(nf, 4)[:, 1:]
+lo, hi = V.min(0), V.max(0)
+V = (V - (lo + hi) / 2) / (hi[1] - lo[1])
+a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+n = np.cross(b - a, c - a)
+vol = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6
+with open(dst, "w") as f:
+    f.write("solid s\n")
+    for k in range(nf):
+        nk = n[k] / (np.linalg.norm(n[k]) + 1e-300)
+        f.write(f"facet normal {nk[0]:.6e} {nk[1]:.6e} {nk[2]:.6e}\nouter loop\n")
+        for p in (a[k], b[k], c[k]):
+            f.write(f"vertex {p[0]:.9e} {p[1]:.9e} {p[2]:.9e}\n")
+        f.write("endloop\nendfacet\n")
+    f.write("endsolid s\n")
+print(f"{abs(vol):.9g}")
+EOF
+}
+
+make_mesh() {  # name size
+  local name="$1" size="$2" target src
+  case "$size" in
+    5k) target=5000 ;; 12k) target=12000 ;; 50k) target=50000 ;; 270k) target=270000 ;;
+    *) die "unknown size '$size' (valid: 5k, 12k, 50k, 270k)" ;;
+  esac
+  case "$name" in
+    bunny) src=bunny00.off ;; armadillo) src=armadillo.off ;;
+    *) die "unknown mesh '$name' (valid: bunny, armadillo)" ;;
+  esac
+  local base="$out/${name}_${size}"
+  if [[ -s "$base.node" && -s "$base.ele" ]]; then
+    echo "get_meshes.sh: $base.{node,ele} cached" >&2
+    return
+  fi
+  fetch_sources
+  local work
+  work="$(mktemp -d)"
+  trap 'rm -rf "$work"' RETURN
+  local vol
+  vol="$(off_to_stl "$out/src/$src" "$work/surface.stl")"
+  local input="$work/surface.stl" flags="-pq1.414"
+  if (( target < 90000 )); then
+    # Mean edge of a regular tet of volume vol/target: e = (6·sqrt(2)·vol/target)^(1/3).
+    local h
+    h="$(python3 -c "print(f'{(8.485*$vol/$target)**(1/3):.6g}')")"
+    echo "get_meshes.sh: $name:$size: remeshing the surface with gmsh, size $h m" >&2
+    cat >"$work/coarsen.geo" <<EOF
+Merge "$work/surface.stl";
+ClassifySurfaces{40*Pi/180, 1, 1, Pi};
+CreateGeometry;
+Mesh.MeshSizeMin = $h;
+Mesh.MeshSizeMax = $h;
+Mesh.MeshSizeFromCurvature = 0;
+General.NumThreads = 1;
+EOF
+    gmsh -2 "$work/coarsen.geo" -format stl -o "$work/coarse.stl" >"$work/gmsh.log" 2>&1 ||
+      { tail -20 "$work/gmsh.log" >&2; die "gmsh failed to remesh $src"; }
+    input="$work/coarse.stl"
+    flags="-pq1.414Y"
+  fi
+  local a count=0 try
+  a="$(python3 -c "print(f'{2*$vol/$target:.6g}')")"
+  for try in 1 2 3 4; do
+    rm -f "$work"/coarse.1.* "$work"/surface.1.*
+    tetgen "${flags}a$a" -Q "$input" >"$work/tetgen.log" 2>&1 ||
+      { tail -20 "$work/tetgen.log" >&2; die "tetgen ${flags}a$a failed on $input"; }
+    count="$(head -1 "${input%.stl}.1.ele" | awk '{print $1}')"
+    echo "get_meshes.sh: $name:$size: tetgen ${flags}a$a -> $count tets" >&2
+    # Within 15%: done; else scale a by the ratio (tets ∝ 1/a while a limits the size).
+    if python3 -c "import sys; sys.exit(0 if abs($count/$target-1) <= 0.15 else 1)"; then break; fi
+    a="$(python3 -c "print(f'{$a*$count/$target:.6g}')")"
+  done
+  cp "${input%.stl}.1.node" "$base.node.tmp" && mv "$base.node.tmp" "$base.node"
+  cp "${input%.stl}.1.ele" "$base.ele.tmp" && mv "$base.ele.tmp" "$base.ele"
+  printf 'source=%s volume=%s tetgen_flags=%sa%s tets=%s target=%s\n' "$src" "$vol" "$flags" "$a" "$count" "$target" >"$base.log"
+  echo "get_meshes.sh: wrote $base.{node,ele} ($count tets)" >&2
+}
+
+[[ $# -ge 1 ]] || die "usage: get_meshes.sh NAME:SIZE ... | --all   (NAME: bunny|armadillo, SIZE: 5k|12k|50k|270k)"
+specs=("$@")
+if [[ "$1" == "--all" ]]; then
+  specs=(bunny:5k bunny:12k bunny:50k armadillo:5k armadillo:12k armadillo:50k)
+fi
+for spec in "${specs[@]}"; do
+  [[ "$spec" == *:* ]] || die "'$spec' is not NAME:SIZE (e.g. bunny:12k)"
+  make_mesh "${spec%%:*}" "${spec#*:}"
+done
