@@ -227,6 +227,8 @@ def claim_squash(S, files, notes, out):
         S.add(claim, f"mgpbd relative dual residual at the end ({m})", p[2],
               f"{e(float(r['data']['relative_dual_residual'][-1]))} at {int(r['data']['iteration'][-1])}")
     if not rx and not rm:
+        if "squash_xpbd" not in notes and "squash_mgpbd" not in notes:
+            S.not_run(claim, "no results")
         return
     import matplotlib
     matplotlib.use("Agg")

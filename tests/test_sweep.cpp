@@ -302,7 +302,9 @@ TEST(Reference, PositionErrorIsOneAtPredictionAndVanishesForConvergedDirectSolve
   ASSERT_EQ(gs.log.reference_status.size(), 2u);
   ASSERT_EQ(gs.log.position_error.size(), gs.log.iteration.size());
   for (size_t i = 0; i < gs.log.iteration.size(); ++i)
-    if (gs.log.iteration[i] == 0) EXPECT_NEAR(gs.log.position_error[i], 1.0, 1e-12);
+    if (gs.log.iteration[i] == 0) {
+      EXPECT_NEAR(gs.log.position_error[i], 1.0, 1e-12);
+    }
   EXPECT_GT(gs.log.position_error[10], 1e-2);
   // Without the option nothing is logged.
   EXPECT_TRUE(run_simulation(prob, p, "xpbd-gs").log.position_error.empty());
