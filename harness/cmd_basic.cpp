@@ -2,6 +2,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "common.hpp"
+#include "mesh_writer.hpp"
 
 #include "../problems/error.hpp"
 #include "../problems/scene.hpp"
@@ -27,11 +28,12 @@ int cmd_list(const CommandArgs& argv) {
 
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
-            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--reference", false}});
+            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
   const std::string out = args.require("--out");
   std::vector<std::string> sets;
+  if (args.has("--variant")) sets.push_back("variant=" + args.get("--variant"));  // explicit --set keys win
   if (args.has("--frames")) sets.push_back("frames=" + args.get("--frames"));
   for (const auto& s : args.all("--set")) sets.push_back(s);
   const Params p = resolve_params(scene, sets);
@@ -45,7 +47,14 @@ int cmd_run(const CommandArgs& argv) {
   int index = 0;
   for (const auto& method : solvers) {
     std::cerr << "run: " << p.scene << " with " << method << " ..." << std::flush;
-    const RunResult res = run_simulation(prob, p, method, opt);
+    RunOptions run_opt = opt;
+    if (args.has("--write-meshes")) {  // DIR/<scene>_<solver>_NNNN.ply per frame
+      const std::string dir = args.get("--write-meshes");
+      run_opt.on_frame = [&, dir](int frame, const Eigen::Matrix3Xd& x) {
+        write_ply(frame_ply_path(dir, p.scene + "_" + method, frame), prob, x);
+      };
+    }
+    const RunResult res = run_simulation(prob, p, method, run_opt);
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
     ++index;
     append_runs(out, {make_simulation_record(run_name(index, p.scene, method), p, method, res)}, index == 1);

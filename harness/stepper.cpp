@@ -1,5 +1,7 @@
 #include "stepper.hpp"
 
+#include "stability.hpp"
+
 #include "reference.hpp"
 
 #include "../problems/dual_system.hpp"
@@ -82,6 +84,7 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
     solver = make_linear_solver(method, p);
 
   Particles& P = prob.particles;
+  StabilityMonitor stability(prob, p);  // after every substep: nan, runaway, inverted tets
   Eigen::Matrix3Xd x_pred, x_old, dx, work;
   Eigen::VectorXd lambda(m), b(m), dlambda;
   ConstraintState state;
@@ -221,6 +224,10 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
           any_max_iterations = true;
         project_colliders(prob, P.x);
         P.v = (P.x - x_old) / h;
+        if (std::string st, msg; !stability.check(P, frame, sub, st, msg)) {
+          fail(st, msg);
+          break;
+        }
       }
       if (!stop && opt.on_frame) opt.on_frame(frame, P.x);
     }
@@ -239,6 +246,16 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
   }
   if (local && method == "xpbd-gs") res.stats["colors"] = local->num_colors();
   if (local && method == "xpbd-jacobi") res.stats["jacobi_relaxation_used"] = local->relaxation();
+  // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
+  // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
+  if (stability.has_tets()) res.arrays["inverted_tets"] = stability.inverted_tets();
+  if (prob.distance.size() > 0) {
+    std::vector<double> edges;
+    edges.reserve(2 * prob.distance.size());
+    for (const auto& e : prob.distance.idx) edges.insert(edges.end(), {double(e[0]), double(e[1])});
+    res.arrays["distance_edges"] = std::move(edges);
+    res.arrays["distance_rest_length"] = prob.distance.rest_length;
+  }
   res.stats["rows"] = m;
   res.stats["nonzeros"] = static_cast<double>(ds.A().nonZeros());
   res.stats["particles"] = P.size();

@@ -29,6 +29,9 @@ std::vector<ParamField> make_fields() {
       {"compliance", T::Double, "m/N, distance-constraint compliance (0 = rigid)", &Params::compliance, 0, inf, {}},
       {"stiffness", T::Double, "Pa, ARAP shear modulus mu of tets (alpha = 1/(mu V))", &Params::stiffness, 1e-300, inf, {}},
       {"prestretch", T::Double, "initial stretch of a generated bar along its length (1 = rest shape)", &Params::prestretch, 0.1, 10, {}},
+      {"twist", T::Double, "rad, twist_bar: initial twist about the long axis, end to end", &Params::twist, -1e3, 1e3, {}},
+      {"mass_ratio", T::Double, "heaviest/lightest particle mass, graded by index as i^2 (1 = uniform)", &Params::mass_ratio, 1, 1e300, {}},
+      {"variant", T::String, "extreme case: none | rigid | mu1e12 | mass_ratio_1e4 | dt_30hz | near_degenerate (sets the keys it implies)", &Params::variant, 0, 0, {"none", "rigid", "mu1e12", "mass_ratio_1e4", "dt_30hz", "near_degenerate"}},
       {"max_iterations", T::Int, "outer iterations per substep", &Params::max_iterations, 1, 1e9, {}},
       {"rtol", T::Double, "outer stop: dual residual relative to iteration 0", &Params::rtol, 0, inf, {}},
       {"atol", T::Double, "outer stop: absolute dual residual", &Params::atol, 0, inf, {}},
@@ -95,6 +98,7 @@ void set_param(Params& p, const std::string& key, const std::string& value, cons
     if (!f->choices.empty() && std::find(f->choices.begin(), f->choices.end(), value) == f->choices.end())
       throw bad("must be one of " + join(f->choices));
     p.*std::get<std::string Params::*>(f->member) = value;
+    if (key == "variant") apply_variant_keys(p);  // a variant sets the keys it implies, where it is set
     return;
   }
   errno = 0;
@@ -128,6 +132,15 @@ ParamValue param_value(const Params& p, const ParamField& f) {
     case T::Double: return p.*std::get<double Params::*>(f.member);
     default: return p.*std::get<std::string Params::*>(f.member);
   }
+}
+
+void apply_variant_keys(Params& p) {
+  // What each extreme case changes in the parameters; rigid and near_degenerate also act on the
+  // built Problem (problems/scene.cpp: apply_variant_to_problem / the mesh builders).
+  if (p.variant == "rigid") p.compliance = 0;
+  else if (p.variant == "mu1e12") p.stiffness = 1e12;
+  else if (p.variant == "mass_ratio_1e4") p.mass_ratio = 1e4;
+  else if (p.variant == "dt_30hz") p.dt = 1.0 / 30.0;
 }
 
 void validate(const Params& p) {

@@ -24,6 +24,9 @@ struct Params {
   double compliance = 1e-8;          // m/N, distance constraints
   double stiffness = 1e6;            // Pa, μ of the tet ARAP constraint (α = 1/(μ V_rest))
   double prestretch = 1.0;           // initial stretch of generated bars along their length (1 = at rest)
+  double twist = 0;                  // rad: twist_bar's initial twist of the bar about its long axis, end to end
+  double mass_ratio = 1;             // heaviest/lightest particle: mass_i = particle_mass·(1 + (ratio−1)(i/(n−1))²)
+  std::string variant = "none";      // extreme case (problems/scene.hpp: apply_variant); setting it also sets the keys it implies
   // --- outer (nonlinear) loop ---
   int max_iterations = 100;          // outer iterations per substep
   double rtol = 1e-6;                // stop when ‖C+α̃λ‖ ≤ rtol·(its value at iteration 0)
@@ -83,6 +86,10 @@ void set_param(Params& p, const std::string& key, const std::string& value, cons
 std::string param_to_string(const Params& p, const ParamField& f);
 using ParamValue = std::variant<long long, double, std::string>;
 ParamValue param_value(const Params& p, const ParamField& f);
+
+// Sets the keys p.variant implies (rigid: compliance 0; mu1e12: stiffness 1e12;
+// mass_ratio_1e4: mass_ratio 1e4; dt_30hz: dt 1/30 s). Called by set_param("variant").
+void apply_variant_keys(Params& p);
 
 // Cross-field checks (e.g. dt > 0); throws xb::Error naming the key.
 void validate(const Params& p);

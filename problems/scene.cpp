@@ -2,6 +2,7 @@
 
 #include "error.hpp"
 #include "generators.hpp"
+#include "real_meshes.hpp"
 
 #include <toml++/toml.h>
 
@@ -154,7 +155,8 @@ namespace {
 // and NV−1 as in the authors' code: the two corners (i = 0, k = N) and (i = N, k = N).
 Problem build_cloth_hang(const Params& p) {
   const int N = p.resolution;
-  const TriMesh m = make_cloth_grid(N, p.size, 0.5);
+  TriMesh m = make_cloth_grid(N, p.size, 0.5);
+  if (p.variant == "near_degenerate") flatten_some_triangles(m);
   Problem prob = make_cloth_problem("cloth_hang", m, p);
   prob.particles.w[N] = 0;                    // vertex (i = 0, k = N)
   prob.particles.w[(N + 1) * (N + 1) - 1] = 0;  // vertex (i = N, k = N)
@@ -165,7 +167,8 @@ Problem build_cloth_hang(const Params& p) {
 Problem build_bar_hang(const Params& p) {
   const int r = p.resolution;
   const double h = p.size / r;
-  const TetMesh m = make_tet_bar(p.aspect * r, r, r, h);
+  TetMesh m = make_tet_bar(p.aspect * r, r, r, h);
+  if (p.variant == "near_degenerate") flatten_some_tets(m);
   Problem prob = make_tet_problem("bar_hang", m, p);
   for (int i = 0; i < prob.particles.size(); ++i) {
     if (m.vertices(0, i) == 0.0) prob.particles.w[i] = 0;
@@ -174,12 +177,160 @@ Problem build_bar_hang(const Params& p) {
   return prob;
 }
 
+// ---- issue 5: the paper's scenes. Each takes its mesh from the `mesh` key (load_tet_mesh).
+
+Problem tet_scene(const std::string& name, const Params& p, const std::string& fallback_mesh, TetMesh* mesh_out = nullptr) {
+  MeshReadReport report;
+  TetMesh m = load_tet_mesh(p.mesh, p, fallback_mesh, &report);
+  if (p.variant == "near_degenerate") flatten_some_tets(m);
+  Problem prob = make_tet_problem(name, m, p);
+  if (mesh_out) *mesh_out = std::move(m);
+  return prob;
+}
+
+// Figs. 13/17: every vertex collapsed to the minimum y of the mesh, released; no gravity.
+// The rest shape is the mesh itself, so every tet starts flat (σ₃ = 0, C = 1).
+Problem build_squash(const Params& p) {
+  Problem prob = tet_scene("squash", p, "ball");
+  const double ymin = prob.particles.x.row(1).minCoeff();
+  prob.particles.x.row(1).setConstant(ymin);
+  return prob;
+}
+
+// A bar (aspect·r × r × r cubes) twisted about its long (x) axis by `twist` rad end to end,
+// released with no gravity.
+Problem build_twist_bar(const Params& p) {
+  Problem prob = tet_scene("twist_bar", p, "bar");
+  Eigen::Matrix3Xd& x = prob.particles.x;
+  const double x0 = x.row(0).minCoeff(), len = x.row(0).maxCoeff() - x0;
+  const double yc = (x.row(1).minCoeff() + x.row(1).maxCoeff()) / 2, zc = (x.row(2).minCoeff() + x.row(2).maxCoeff()) / 2;
+  for (int i = 0; i < prob.particles.size(); ++i) {
+    const double a = p.twist * (len > 0 ? (x(0, i) - x0) / len : 0);
+    const double y = x(1, i) - yc, z = x(2, i) - zc;
+    x(1, i) = yc + std::cos(a) * y - std::sin(a) * z;
+    x(2, i) = zc + std::sin(a) * y + std::cos(a) * z;
+  }
+  return prob;
+}
+
+// The authors' `reinit=beam`: a bar with its left 1% (by x extent, at least the x = min face)
+// fixed, under gravity.
+Problem build_cantilever(const Params& p) {
+  Problem prob = tet_scene("cantilever", p, "bar");
+  const Eigen::Matrix3Xd& x = prob.particles.x;
+  const double x0 = x.row(0).minCoeff(), len = x.row(0).maxCoeff() - x0;
+  for (int i = 0; i < prob.particles.size(); ++i)
+    if (x(0, i) <= x0 + 0.01 * len) prob.particles.w[i] = 0;
+  return prob;
+}
+
+// A tet ball resting 1 cm above the ground plane y = 0 (the only scene with a collider), falling
+// under gravity; particles below the plane are projected onto it, as the paper does.
+Problem build_ball_drop(const Params& p) {
+  Problem prob = tet_scene("ball_drop", p, "ball");
+  Eigen::Matrix3Xd& x = prob.particles.x;
+  const double lift = 0.01 - x.row(1).minCoeff();
+  x.row(1).array() += lift;
+  prob.planes.push_back(PlaneCollider{0.0});
+  return prob;
+}
+
+// A chain of `resolution` links of total length `size` along x, its first particle pinned,
+// released horizontally under gravity. Particle masses grow with index as i² up to mass_ratio
+// (build_problem grades them; the authors' cloth3d setup_num=2 tests this).
+Problem build_mass_chain(const Params& p) {
+  const int n = p.resolution + 1;
+  TriMesh m;
+  m.vertices.resize(3, n);
+  for (int i = 0; i < n; ++i) m.vertices.col(i) = Eigen::Vector3d(p.size * i / (n - 1), 0.5, 0);
+  if (p.variant == "near_degenerate")  // every 10th link nearly zero length: link lengths span 1e3
+    for (int i = 5; i + 1 < n; i += 10) m.vertices.col(i) = m.vertices.col(i + 1) - Eigen::Vector3d(1e-3 * p.size / (n - 1), 0, 0);
+  for (int i = 0; i + 1 < n; ++i) m.edges.push_back({i, i + 1});
+  Problem prob = make_cloth_problem("mass_chain", m, p);
+  prob.particles.w[0] = 0;
+  return prob;
+}
+
 }  // namespace
+
+void flatten_some_tets(TetMesh& m) {
+  // Every 50th tet: its last vertex is moved to 1e-3 of its height above the opposite face,
+  // unless that would invert (or flatten below 1e-3) another tet using the vertex.
+  std::vector<std::vector<int>> incident(m.vertices.cols());
+  for (size_t t = 0; t < m.tets.size(); ++t)
+    for (int v : m.tets[t]) incident[v].push_back(static_cast<int>(t));
+  auto vol = [&](int t) {
+    const auto& e = m.tets[t];
+    return tet_volume(m.vertices.col(e[0]), m.vertices.col(e[1]), m.vertices.col(e[2]), m.vertices.col(e[3]));
+  };
+  std::vector<double> v0(m.tets.size());
+  for (size_t t = 0; t < m.tets.size(); ++t) v0[t] = vol(static_cast<int>(t));
+  for (size_t t = 0; t < m.tets.size(); t += 50) {
+    const auto e = m.tets[t];
+    const Eigen::Vector3d a = m.vertices.col(e[0]), b = m.vertices.col(e[1]), c = m.vertices.col(e[2]);
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    const Eigen::Vector3d d = m.vertices.col(e[3]);
+    const double height = (d - a).dot(n);
+    const Eigen::Vector3d keep = d;
+    m.vertices.col(e[3]) = d - (1 - 1e-3) * height * n;
+    bool ok = true;
+    for (int s : incident[e[3]])
+      if (s != static_cast<int>(t) && !(vol(s) > 1e-3 * v0[s])) ok = false;
+    if (!ok) m.vertices.col(e[3]) = keep;
+  }
+}
+
+void flatten_some_triangles(TriMesh& m) {
+  // Every 50th triangle: its last vertex is moved to 1e-3 of its height above the opposite edge
+  // (in the triangle's plane), unless that flips or flattens another triangle using the vertex.
+  std::vector<std::vector<int>> incident(m.vertices.cols());
+  for (size_t t = 0; t < m.triangles.size(); ++t)
+    for (int v : m.triangles[t]) incident[v].push_back(static_cast<int>(t));
+  auto normal = [&](int t) {
+    const auto& e = m.triangles[t];
+    return Eigen::Vector3d((m.vertices.col(e[1]) - m.vertices.col(e[0])).cross(m.vertices.col(e[2]) - m.vertices.col(e[0])));
+  };
+  std::vector<Eigen::Vector3d> n0(m.triangles.size());
+  for (size_t t = 0; t < m.triangles.size(); ++t) n0[t] = normal(static_cast<int>(t));
+  for (size_t t = 0; t < m.triangles.size(); t += 50) {
+    const auto e = m.triangles[t];
+    const Eigen::Vector3d a = m.vertices.col(e[0]), b = m.vertices.col(e[1]), c = m.vertices.col(e[2]);
+    const Eigen::Vector3d u = (b - a).normalized();
+    const Eigen::Vector3d foot = a + (c - a).dot(u) * u;
+    m.vertices.col(e[2]) = foot + 1e-3 * (c - foot);
+    bool ok = true;
+    for (int s : incident[e[2]])
+      if (s != static_cast<int>(t) && !(normal(s).dot(n0[s]) > 1e-3 * n0[s].squaredNorm())) ok = false;
+    if (!ok) m.vertices.col(e[2]) = c;
+  }
+}
+
+void apply_variant(const Params& p, Problem& prob) {
+  if (p.variant == "rigid") {
+    // Infinite stiffness (Goldenthal's method): every constraint has α = 0. With redundant
+    // constraints A = ∇C M⁻¹ ∇Cᵀ is singular, which a global solver must report.
+    for (auto& a : prob.distance.compliance) a = 0;
+    for (auto& a : prob.tets.compliance) a = 0;
+  }
+  if (p.mass_ratio != 1) {
+    const int n = prob.particles.size();
+    for (int i = 0; i < n; ++i) {
+      if (prob.particles.w[i] == 0) continue;  // pins stay pinned
+      const double s = n > 1 ? static_cast<double>(i) / (n - 1) : 0;
+      prob.particles.w[i] = 1.0 / (p.particle_mass * (1 + (p.mass_ratio - 1) * s * s));
+    }
+  }
+}
 
 const std::vector<BuilderInfo>& scene_builders() {
   static const std::vector<BuilderInfo> b = {
       {"cloth_hang", "horizontal cloth, two corners pinned, gravity (paper Fig. 8)", build_cloth_hang},
       {"bar_hang", "tet bar with one end pinned under gravity (a cantilever)", build_bar_hang},
+      {"squash", "mesh collapsed to its minimum y and released, no gravity (paper Figs. 13/17)", build_squash},
+      {"twist_bar", "pre-twisted tet bar released, no gravity (paper's twist-bar energy plot)", build_twist_bar},
+      {"cantilever", "tet bar with its left 1% fixed, under gravity (authors' reinit=beam)", build_cantilever},
+      {"ball_drop", "tet ball falling onto the ground plane y = 0 (the one scene with a collider)", build_ball_drop},
+      {"mass_chain", "chain pinned at one end, masses growing as i^2 up to mass_ratio, under gravity", build_mass_chain},
   };
   return b;
 }
@@ -189,6 +340,7 @@ Problem build_problem(const Params& p) {
   for (const auto& b : scene_builders())
     if (b.name == p.scene) {
       Problem prob = b.build(p);
+      apply_variant(p, prob);
       prob.check();
       return prob;
     }

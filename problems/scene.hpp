@@ -43,6 +43,22 @@ const std::vector<BuilderInfo>& scene_builders();
 // Builds p.scene's Problem; throws xb::Error for an unknown builder or a broken problem.
 Problem build_problem(const Params& p);
 
+// Extreme cases (the `variant` key; apply_variant_keys in params.hpp sets the keys they imply):
+//   rigid            all compliances 0 (infinite stiffness, Goldenthal's method)
+//   mu1e12           stiffness 1e12
+//   mass_ratio_1e4   masses graded by index as i² up to a ratio of 1e4
+//   dt_30hz          dt = 1/30 s
+//   near_degenerate  tet scenes: flatten_some_tets; cloth: flatten_some_triangles;
+//                    mass_chain: every 10th link 1e-3 as long as the others
+// apply_variant does the part that acts on a built Problem (rigid; the mass grading of
+// mass_ratio, which mass_chain and mass_ratio_1e4 use). build_problem calls it.
+void apply_variant(const Params& p, Problem& prob);
+// Every 50th tet flattened to 1e-3 of its height (its last vertex moved towards the opposite
+// face) where that inverts no neighbour; the rest shape is this flattened mesh.
+void flatten_some_tets(TetMesh& mesh);
+// The same for cloth: every 50th triangle flattened to 1e-3 of its height.
+void flatten_some_triangles(TriMesh& mesh);
+
 // Shared construction steps.
 // Tets: one ARAP constraint per tet, α = 1/(μ V_rest), particle_mass per particle.
 Problem make_tet_problem(const std::string& name, const TetMesh& mesh, const Params& p);
