@@ -10,4 +10,6 @@ int cmd_list(const CommandArgs& args);
 int cmd_run(const CommandArgs& args);
 int cmd_report(const CommandArgs& args);
 int cmd_sweep(const CommandArgs& args);
+int cmd_capture(const CommandArgs& args);
+int cmd_solve(const CommandArgs& args);
 }  // namespace xb

@@ -23,6 +23,9 @@ const Command commands[] = {
      "run --scene NAME|FILE --solver A,B,... [--frames N] [--set key=value]... [--time-budget S] [--reference] --out FILE.h5"},
     {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
     {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--time-budget S]   (resumes: skips runs already in FILE)"},
+    {"capture", xb::cmd_capture,
+     "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] --out PREFIX"},
+    {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5"},
 };
 
 void usage(std::ostream& os) {
@@ -50,7 +53,9 @@ int main(int argc, char** argv) {
     for (const auto& c : commands)
       if (name == c.name) cmd = &c;
     if (!cmd) {
-      std::cerr << "xpbd-bench: unknown command '" << name << "' (valid: list, run, report)\n";
+      std::string valid;
+      for (const auto& c : commands) valid += (valid.empty() ? "" : ", ") + std::string(c.name);
+      std::cerr << "xpbd-bench: unknown command '" << name << "' (valid: " << valid << ")\n";
       rc = 2;
     } else {
       try {

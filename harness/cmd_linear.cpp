@@ -1,0 +1,263 @@
+// The linear level of the benchmark: `capture` writes the dual system (A, b) of one outer
+// iteration of a scene to disk; `solve` runs linear solvers on a captured system and records
+// their residual histories and their error against the direct (CHOLMOD) solution.
+#include "args.hpp"
+#include "commands.hpp"
+#include "common.hpp"
+#include "system_io.hpp"
+
+#include "../problems/error.hpp"
+#include "../problems/scene.hpp"
+#include "../solvers/kernels.hpp"
+#include "../solvers/linear_solver.hpp"
+#include "../solvers/timer.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <set>
+
+namespace fs = std::filesystem;
+
+namespace xb {
+
+namespace {
+
+constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
+
+int require_int(const Args& args, const std::string& cmd, const std::string& flag) {
+  if (!args.has(flag)) throw Error(cmd + ": option " + flag + " is required");
+  return args.get_int(flag, 0);
+}
+
+std::string strip_h5(const std::string& s) {
+  return s.size() > 3 && s.compare(s.size() - 3, 3, ".h5") == 0 ? s.substr(0, s.size() - 3) : s;
+}
+
+// max |A_ij − A_ji| / max |A_ij|: the assembly sums shared-particle terms in row order, so the
+// two triangles may differ in the last bits; Matrix Market keeps the lower one.
+double asymmetry(const SparseMatrix& A) {
+  const SparseMatrix At = A.transpose();
+  const double scale = A.coeffs().size() ? A.coeffs().cwiseAbs().maxCoeff() : 0.0;
+  const SparseMatrix D = A - At;
+  const double d = D.coeffs().size() ? D.coeffs().cwiseAbs().maxCoeff() : 0.0;
+  return scale > 0 ? d / scale : 0.0;
+}
+
+// The parameters a system was captured with (its attributes), so that solvers see the scene's
+// settings; keys this build does not know are ignored.
+Params params_from_system(const CapturedSystem& sys, const std::string& path) {
+  Params p;
+  for (const auto& f : param_fields()) {
+    if (!sys.attrs.count(f.key)) continue;
+    set_param(p, f.key, attr_text(sys.attrs, f.key), path + " (attribute " + f.key + ")");
+  }
+  return p;
+}
+
+// ‖v‖_A = sqrt(vᵀAv).
+double a_norm(const SparseMatrix& A, const Vector& v) {
+  Vector Av;
+  spmv(A, v, Av);
+  const double q = dot(v, Av);
+  return q >= 0 ? std::sqrt(q) : nan_value;
+}
+
+}  // namespace
+
+int cmd_capture(const CommandArgs& argv) {
+  Args args("capture", argv,
+            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}});
+  // Everything is checked before anything runs or is written.
+  const std::string scene = args.require("--scene");
+  const std::string prefix = strip_h5(args.require("--out"));
+  const int frame = require_int(args, "capture", "--frame");
+  const int iteration = require_int(args, "capture", "--iteration");
+  const int substep = args.get_int("--substep", 0);
+  if (frame < 0) throw Error("capture: --frame must be >= 0");
+  if (iteration < 0) throw Error("capture: --iteration must be >= 0");
+  const auto solvers = parse_methods(args.get("--solver", "cholmod"), true);
+  if (solvers.size() != 1) throw Error("capture: --solver takes one linear solver (it drives the simulation)");
+  const std::string& solver = solvers[0];
+  Params p = resolve_params(scene, args.all("--set"));
+  if (substep < 0 || substep >= p.substeps)
+    throw Error("capture: --substep " + std::to_string(substep) + " out of range [0, " + std::to_string(p.substeps - 1) + "]");
+  // The run only has to reach the requested frame.
+  if (p.frames < frame + 1) p.frames = frame + 1;
+  if (iteration >= p.max_iterations)
+    throw Error("capture: --iteration " + std::to_string(iteration) + " is never assembled: the stepper stops at max_iterations = " +
+                std::to_string(p.max_iterations) + " (raise it with --set max_iterations=N)");
+  const Problem prob = build_problem(p);
+
+  bool captured = false;
+  SparseMatrix A;
+  Vector b;
+  RunOptions opt;
+  opt.on_system = [&](int f, int s, int it, const SparseMatrix& Ain, const Vector& bin) {
+    if (f != frame || s != substep || it != iteration) return false;
+    A = Ain;
+    A.makeCompressed();
+    b = bin;
+    captured = true;
+    return true;
+  };
+  std::cerr << "capture: " << p.scene << " with " << solver << " to frame " << frame << ", substep " << substep
+            << ", iteration " << iteration << " ..." << std::flush;
+  const RunResult res = run_simulation(prob, p, solver, opt);
+  if (!captured) {
+    std::cerr << "\n";
+    // Where the run stopped, from its log.
+    long long last_it = -1;
+    for (size_t k = 0; k < res.log.frame.size(); ++k)
+      if (res.log.frame[k] == frame && res.log.substep[k] == substep) last_it = std::max(last_it, res.log.iteration[k]);
+    std::string why = "run status " + res.status + (res.message.empty() ? "" : " (" + res.message + ")");
+    if (last_it >= 0 && (res.status == "ok" || res.status == "max_iterations"))
+      why = "that substep converged after " + std::to_string(last_it) + " outer iterations, so its last assembled system is iteration " +
+            std::to_string(last_it - 1);
+    throw Error("capture: the run ended before frame " + std::to_string(frame) + ", substep " + std::to_string(substep) +
+                ", iteration " + std::to_string(iteration) + " was reached: " + why);
+  }
+  std::cerr << " captured\n";
+
+  RunRecord meta;  // for its attributes: provenance and every parameter
+  add_provenance(meta, p);
+  meta.attrs["scene"] = p.scene;
+  meta.attrs["frame"] = static_cast<long long>(frame);
+  meta.attrs["substep"] = static_cast<long long>(substep);
+  meta.attrs["iteration"] = static_cast<long long>(iteration);
+  meta.attrs["capture_solver"] = solver;
+  meta.attrs["rhs_norm"] = b.norm();  // = the dual residual ‖C + α̃λ‖ at that state
+  meta.attrs["asymmetry"] = asymmetry(A);
+  write_captured_system(prefix, A, b, meta.attrs);
+  std::cout << "capture: wrote " << prefix << ".h5, " << prefix << "_A.mtx, " << prefix << "_b.mtx (" << A.rows() << " rows, "
+            << A.nonZeros() << " non-zeros)\n";
+  return 0;
+}
+
+int cmd_solve(const CommandArgs& argv) {
+  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}});
+  // Everything is checked before anything is written.
+  const std::string system_path = args.require("--system");
+  const std::string out = args.require("--out");
+  const auto solvers = parse_methods(args.require("--solver"), true);
+  const CapturedSystem sys = read_system_h5(system_path);
+  Params p = params_from_system(sys, system_path);
+  for (const auto& s : args.all("--set")) apply_set(p, s);
+  if (args.has("--tol")) set_param(p, "linear.tol", args.get("--tol"), "solve --tol");
+  validate(p);
+  if (p.threads > 0) omp_set_num_threads(p.threads);
+  const std::string prefix = strip_h5(system_path);
+  const std::string stem = fs::path(prefix).filename().string();
+  const SparseMatrix& A = sys.A;
+  const Vector& b = sys.b;
+  const double bnorm = norm2(b);
+
+  // The reference x* = A⁻¹b: CHOLMOD plus one step of iterative refinement.
+  Vector xstar;
+  std::string direct_status = "ok";
+  double direct_residual = nan_value;
+  try {
+    auto direct = make_linear_solver("cholmod", p);
+    direct->setup(A, SetupKind::Structure, SetupContext{});
+    const LinearStats st = direct->solve(b, xstar);
+    if (st.status != LinearStatus::converged) {
+      direct_status = to_string(st.status);
+      xstar.resize(0);
+    } else {
+      Vector r, d;
+      residual(A, xstar, b, r);
+      if (direct->solve(r, d).status == LinearStatus::converged) xstar += d;
+      residual(A, xstar, b, r);
+      direct_residual = bnorm > 0 ? norm2(r) / bnorm : 0;
+    }
+  } catch (const std::exception& e) {
+    direct_status = std::string("error: ") + e.what();
+    xstar.resize(0);
+  }
+  if (xstar.size() == 0) std::cerr << "solve: no direct reference solution (cholmod: " << direct_status << "); error_vs_direct is NaN\n";
+  const double xstar_a = xstar.size() ? a_norm(A, xstar) : nan_value;
+  const double xstar_2 = xstar.size() ? norm2(xstar) : nan_value;
+
+  int index = 0;
+  for (const auto& name : solvers) {
+    ++index;
+    RunRecord r;
+    r.name = run_name(index, stem, name);
+    add_provenance(r, p);
+    // The capture's identity (the parameters above are those of the solve).
+    for (const char* k : {"frame", "substep", "iteration", "capture_solver", "asymmetry"})
+      if (sys.attrs.count(k)) r.attrs[k] = sys.attrs.at(k);
+    r.attrs["scene"] = attr_text(sys.attrs, "scene");
+    r.attrs["level"] = std::string("linear");
+    r.attrs["system"] = prefix;
+    r.attrs["solver"] = name;
+    r.attrs["rows"] = static_cast<long long>(A.rows());
+    r.attrs["nnz"] = static_cast<long long>(A.nonZeros());
+    r.attrs["rhs_norm"] = bnorm;
+    r.attrs["direct_status"] = direct_status;
+    r.attrs["direct_relative_residual"] = direct_residual;
+
+    std::string status = "error", message;
+    LinearStats st;
+    Vector x;
+    double setup_time = nan_value, solve_time = nan_value;
+    std::map<std::string, double> stats;
+    std::map<std::string, std::vector<double>> arrays;
+    std::cerr << "solve: " << stem << " with " << name << " ..." << std::flush;
+    try {
+      auto solver = make_linear_solver(name, p);
+      Timer t;
+      solver->setup(A, SetupKind::Structure, SetupContext{});
+      setup_time = t.seconds();
+      t.reset();
+      st = solver->solve(b, x);
+      solve_time = t.seconds();
+      stats = solver->statistics();
+      arrays = solver->array_statistics();
+      status = st.status == LinearStatus::converged ? "ok" : to_string(st.status);
+      message = st.message;
+    } catch (const std::exception& e) {
+      status = "error";
+      message = e.what();
+    }
+    // The harness's own residual and errors, from x (never from what the solver says).
+    double rel = nan_value, err_a = nan_value, err_2 = nan_value;
+    if (x.size() == A.rows() && x.allFinite()) {
+      Vector res;
+      residual(A, x, b, res);
+      rel = bnorm > 0 ? norm2(res) / bnorm : norm2(res);
+      if (xstar.size()) {
+        const Vector e = x - xstar;
+        err_a = xstar_a > 0 ? a_norm(A, e) / xstar_a : nan_value;
+        err_2 = xstar_2 > 0 ? norm2(e) / xstar_2 : nan_value;
+      }
+    } else if (status != "error") {
+      message += std::string(message.empty() ? "" : "; ") + "solution is missing or not finite";
+    }
+    std::cerr << " " << status << " (" << st.iterations << " iterations, relative residual " << rel << ")\n";
+    r.attrs["status"] = status;
+    r.attrs["message"] = message;
+    r.attrs["iterations"] = static_cast<long long>(st.iterations);
+    r.attrs["final_relative_residual"] = rel;
+    r.attrs["reported_relative_residual"] = status == "error" ? nan_value : st.final_relative_residual;
+    r.attrs["setup_time"] = setup_time;
+    r.attrs["solve_time"] = solve_time;
+    r.attrs["error_vs_direct"] = err_a;
+    r.attrs["error_vs_direct_l2"] = err_2;
+    // Solver statistics; a key that collides with the harness's own gets a "solver_" prefix.
+    for (const auto& [k, v] : stats) r.attrs[r.attrs.count(k) ? "solver_" + k : k] = v;
+    r.datasets["residual"] = st.residual_history;
+    r.datasets["time"] = st.residual_time;
+    if (x.size() == A.rows()) r.datasets["solution"] = std::vector<double>(x.data(), x.data() + x.size());
+    for (const auto& [k, v] : arrays) r.datasets[r.datasets.count(k) ? "solver_" + k : k] = v;
+    append_runs(out, {r}, index == 1);
+  }
+  print_report(out, "table");
+  return 0;
+}
+
+}  // namespace xb
