@@ -6,7 +6,7 @@ usage: python3 plots/cloth_stretch.py RESULTS.h5 [-o OUT.png]
 For every cloth_hang run: the final positions (dataset final_positions) and the edges with their
 rest lengths (datasets distance_edges, distance_rest_length; older files: the N×N grid with one
 diagonal per quad rebuilt from attributes resolution, size); edge strain = |p−q|/l0 − 1.
-One front view (x, y) per run, vertices coloured by the largest strain of their edges, titled with
+One view along x (z, y) per run, vertices coloured by the largest strain of their edges, titled with
 the max and mean strain and the final dual residual. Prints one line per run. Writes PNG and PDF.
 """
 import argparse
@@ -33,20 +33,19 @@ def main():
         sys.exit(f"{a.results}: no cloth_hang runs with final positions")
     data = [(r, *xbruns.cloth_strains(r)) for r in runs]
     vmax = max(float(pv.max()) for _, _, pv, _ in data) or 1e-12
-    fig, axes = plt.subplots(1, len(data), figsize=(4.2 * len(data), 4.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(data), figsize=(5.4 * len(data), 4.4), squeeze=False)
     for ax, (r, s, pv, x) in zip(axes[0], data):
-        sc = ax.scatter(x[:, 0], x[:, 1], c=pv, s=4, cmap="magma", vmin=0, vmax=vmax)
+        sc = ax.scatter(x[:, 2], x[:, 1], c=pv, s=6, cmap="magma", vmin=0, vmax=vmax)
         at = r["attrs"]
-        ax.set_title(f"{at.get('solver')}: max strain {s.max():.2%}, mean {s.mean():.2%}\n"
+        ax.set_title(f"{at.get('solver')}: max strain {s.max():.3g}, mean {s.mean():.3g}\n"
                      f"{at.get('status')}, dual residual {float(at.get('final_dual_residual', 'nan')):.1e}",
-                     fontsize=9)
-        ax.set_aspect("equal")
-        ax.set_xlabel("x (m)")
+                     fontsize=8)
+        ax.set_xlabel("z (m)")
         ax.set_ylabel("y (m)")
         print(f"{r['name']}\t{at.get('solver')}\tmax_strain={s.max():.6g}\tmean_strain={s.mean():.6g}\t"
               f"status={at.get('status')}\tfinal_dual_residual={at.get('final_dual_residual')}")
     fig.colorbar(sc, ax=list(axes[0]), label="largest edge strain at the vertex")
-    fig.suptitle("hanging cloth after the run (front view)")
+    fig.suptitle("hanging cloth after the run, seen along x (the pinned corners are at x = size)", y=1.03)
     xbruns.save(fig, a.out or xbruns.default_out(a.results, "cloth_stretch"))
 
 
