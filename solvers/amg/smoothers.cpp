@@ -26,7 +26,7 @@ void multicolor_gs_sweep(const SparseMatrix& A, const Vector& inv_diag, const Co
     const int c = forward ? cc : coloring.num_colors - 1 - cc;
     const int lo = coloring.color_start[c], hi = coloring.color_start[c + 1];
     // Within one colour the rows are independent, so backward order inside it is irrelevant.
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (hi - lo > kMinParallelRows)
     for (int t = lo; t < hi; ++t) {
       const int i = order[t];
       double s = b[i];
@@ -100,7 +100,7 @@ class DiagonalSmoother : public Smoother {
     const int* cols = A.innerIndexPtr();
     const double* val = A.valuePtr();
     r.resize(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
     for (int i = 0; i < n; ++i) {
       double s = b[i];
       for (int k = outer[i]; k < outer[i + 1]; ++k) s -= val[k] * x[cols[k]];
@@ -121,12 +121,13 @@ class JacobiSmoother final : public DiagonalSmoother {
     const long n = b.size();
     for (int s = 0; s < opt_.sweeps; ++s) {
       if (s == 0 && x_zero) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
         for (long i = 0; i < n; ++i) x[i] = omega * inv_diag_[i] * b[i];
         continue;
       }
       scaled_residual(A, b, x, r_);
-      axpy(omega, r_, x);
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+      for (long i = 0; i < n; ++i) x[i] += omega * r_[i];
     }
   }
   void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { presmooth(A, b, x, false); }
@@ -152,22 +153,24 @@ class ChebyshevSmoother final : public DiagonalSmoother {
     const long n = b.size();
     if (x_zero) {
       r_.resize(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
       for (long i = 0; i < n; ++i) r_[i] = inv_diag_[i] * b[i];
     } else {
       scaled_residual(A, b, x, r_);
     }
     d_ = r_ / theta;
     for (int k = 1;; ++k) {
-      if (x_zero && k == 1)
+      if (x_zero && k == 1) {
         x = d_;
-      else
-        axpy(1.0, d_, x);
+      } else {
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+        for (long i = 0; i < n; ++i) x[i] += d_[i];
+      }
       if (k == kDegree) break;
       scaled_residual(A, b, x, r_);
       const double rho_new = 1.0 / (2.0 * sigma - rho);
       const double c1 = rho_new * rho, c2 = 2.0 * rho_new / delta;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
       for (long i = 0; i < n; ++i) d_[i] = c1 * d_[i] + c2 * r_[i];
       rho = rho_new;
     }

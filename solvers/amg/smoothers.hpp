@@ -18,6 +18,10 @@
 
 namespace xb::amg {
 
+// Loops shorter than this run on one thread: on coarse levels (tens to hundreds of rows) and in
+// small colour classes a parallel region costs more than the work it splits.
+constexpr long kMinParallelRows = 2048;
+
 // 1/A_ii (0 where A_ii ≤ 0: such a row is left alone rather than blown up).
 Vector inverse_diagonal(const SparseMatrix& A);
 
