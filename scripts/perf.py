@@ -15,7 +15,9 @@ Gate: deterministic metrics fail when worse than their tolerance: iterations and
 iterations +10 %, operator and grid complexity +2 %, AMG levels +10 %, a status that leaves
 converged/ok, a system whose size changed, a metric that disappeared (unless its solver is not
 available in this build). Timed metrics are read as ratios to the triad reference of the same
-run; a ratio more than 25 % above the baseline's is flagged SLOWER but does not fail.
+run; a ratio more than 25 % above the baseline's is flagged SLOWER but does not fail. The
+benchmarks run single-threaded by default and the ratios are of CPU times: on a shared, loaded
+machine wall-clock times of OpenMP teams vary several-fold, CPU times of one thread do not.
 """
 import argparse
 import datetime
@@ -85,8 +87,7 @@ def machine_description(build):
     if os.path.exists(cache):
         with open(cache) as f:
             for line in f:
-                for key in ("CMAKE_CXX_COMPILER:", "CMAKE_BUILD_TYPE:", "CMAKE_CXX_FLAGS_RELEASE:",
-                            "XB_WITH_HYPRE:", "XB_WITH_MUELU:"):
+                for key in ("CMAKE_CXX_COMPILER:", "CMAKE_BUILD_TYPE:", "XB_WITH_HYPRE:", "XB_WITH_MUELU:"):
                     if line.startswith(key):
                         m[key.rstrip(":").lower()] = line.split("=", 1)[1].strip()
         if "cmake_cxx_compiler" in m:
@@ -113,7 +114,7 @@ def run_metrics(build, extra_args=()):
         os.unlink(out)
 
 
-def run_benchmarks(build, short, bench_filter=None):
+def run_benchmarks(build, short, threads, bench_filter=None):
     exe = os.path.join(build, "xb_microbench")
     if not os.path.exists(exe):
         sys.exit(f"perf: {exe} not found (build it: ninja -C {build} xb_microbench)")
@@ -124,9 +125,10 @@ def run_benchmarks(build, short, bench_filter=None):
            "--benchmark_min_time=" + ("0.05" if short else "0.3")]
     if bench_filter:
         cmd.append(f"--benchmark_filter={bench_filter}")
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), OPENBLAS_NUM_THREADS=str(threads))
     try:
         # The console table goes to stderr so that it is seen as it runs.
-        r = subprocess.run(cmd, cwd=ROOT, stdout=sys.stderr)
+        r = subprocess.run(cmd, cwd=ROOT, stdout=sys.stderr, env=env)
         if r.returncode != 0:
             sys.exit(f"perf: xb_microbench failed (exit {r.returncode})")
         with open(out) as f:
@@ -135,17 +137,22 @@ def run_benchmarks(build, short, bench_filter=None):
         os.unlink(out)
 
 
-def timed_ratios(gbench):
-    """Benchmark real times over the triad's, per benchmark name (None without a triad)."""
+def timing_field(threads):
+    """Single-threaded: the benchmark thread's CPU time (robust on a loaded machine); else wall."""
+    return "cpu_time" if threads == 1 else "real_time"
+
+
+def timed_ratios(gbench, field="cpu_time"):
+    """Benchmark times over the triad's, per benchmark name ({} without a triad)."""
     if not gbench:
         return {}
     rows = [b for b in gbench.get("benchmarks", []) if b.get("run_type", "iteration") == "iteration"
             and not b.get("error_occurred")]
-    triad = [b["real_time"] for b in rows if b["name"].startswith(TRIAD_PREFIX)]
-    if not triad:
+    triad = [b[field] for b in rows if b["name"].startswith(TRIAD_PREFIX)]
+    if not triad or min(triad) <= 0:
         return {}
     ref = min(triad)
-    return {b["name"]: b["real_time"] / ref for b in rows if not b["name"].startswith(TRIAD_PREFIX)}
+    return {b["name"]: b[field] / ref for b in rows if not b["name"].startswith(TRIAD_PREFIX)}
 
 
 # ---------------------------------------------------------------------------------------- compare
@@ -215,8 +222,10 @@ def compare(base, cur):
     for name, c in cm.items():
         if name not in bm and c["kind"] != "info":
             rows.append((name, c["kind"], "-", fmt(c["value"]), "", "", "new"))
-    # Timed: ratio to the triad of the same run.
+    # Timed: ratio to the triad of the same run, compared only when measured the same way.
     br, cr = base.get("timed_ratios", {}), cur.get("timed_ratios", {})
+    if base.get("timing") != cur.get("timing"):
+        br = {}
     for name in cr:
         if name not in br:
             continue
@@ -251,30 +260,45 @@ def print_table(rows, show_all, out=sys.stdout):
 
 
 def solver_ratio_table(cur, out=sys.stdout):
-    """Each solver's full-solve time over the triad's, per system size."""
+    """Each solver's times over the triad's, per captured system: setup from scratch (structure),
+    values-only setup, solve, and the full solve from scratch (structure setup + solve)."""
     ratios = cur.get("timed_ratios", {})
-    solves = sorted(k for k in ratios if k.startswith("solve/"))
-    if not solves:
+    keys = {}
+    for k in ratios:
+        m = re.match(r"(setup_structure|setup_values|solve)/([^/]+)/(.+)$", k)
+        if m:
+            keys.setdefault((m.group(3), m.group(2)), {})[m.group(1)] = ratios[k]
+    if not keys:
         return
-    print("\nfull solve time / triad time (this run):", file=out)
-    for k in solves:
-        print(f"  {k:<40s} {ratios[k]:10.3f}", file=out)
+    field = cur.get("timing", {}).get("field", "time")
+    nan = float("nan")
+    print(f"\nsolver {field} / triad {field} (this run; full = setup_structure + solve):", file=out)
+    print(f"  {'system':<18s} {'solver':<11s} {'setup_structure':>15s} {'setup_values':>13s} {'solve':>10s} "
+          f"{'full':>10s}", file=out)
+    for (system, solver), v in sorted(keys.items()):
+        full = v.get("setup_structure", nan) + v.get("solve", nan)
+        print(f"  {system:<18s} {solver:<11s} {v.get('setup_structure', nan):15.3f} "
+              f"{v.get('setup_values', nan):13.3f} {v.get('solve', nan):10.3f} {full:10.3f}", file=out)
 
 
 # ---------------------------------------------------------------------------------------- main
 def cmd_run(a):
+    if a.threads < 1:
+        sys.exit("perf: --threads must be >= 1")
     build = os.path.abspath(a.build)
     git = git_info()
     det = run_metrics(build)
-    gb = run_benchmarks(build, a.short, a.filter) if not a.no_bench else None
+    gb = run_benchmarks(build, a.short, a.threads, a.filter) if not a.no_bench else None
+    field = timing_field(a.threads)
     record = {
         "schema": "xpbd-bench perf 1",
         "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "git": git,
         "short": bool(a.short),
         "machine": machine_description(build),
+        "timing": {"threads": a.threads, "field": field},
         "deterministic": det,
-        "timed_ratios": timed_ratios(gb),
+        "timed_ratios": timed_ratios(gb, field),
         "google_benchmark": gb,
     }
     out = a.out or os.path.join(ROOT, "results", "perf", f"{git['sha']}.json")
@@ -315,6 +339,8 @@ def main(argv=None):
     r.add_argument("--out", help="default: results/perf/<git-sha>.json")
     r.add_argument("--filter", help="Google Benchmark regex (the triad is always kept)")
     r.add_argument("--no-bench", action="store_true", help="deterministic metrics only")
+    r.add_argument("--threads", type=int, default=1,
+                   help="OpenMP threads of the benchmarks (1: ratios of CPU times; more: of wall times)")
     r.add_argument("--all", action="store_true", help="show every row, not only what changed")
     r.set_defaults(fn=cmd_run)
     c = sub.add_parser("compare", help="compare two perf JSON files")

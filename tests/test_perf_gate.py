@@ -116,12 +116,21 @@ class CompareRules(unittest.TestCase):
 
     def test_timed_ratios_from_google_benchmark(self):
         gb = {"benchmarks": [
-            {"name": "triad/n:8", "run_type": "iteration", "real_time": 2.0},
-            {"name": "solve/cg/x", "run_type": "iteration", "real_time": 10.0},
-            {"name": "solve/cg/x_mean", "run_type": "aggregate", "real_time": 10.0},
-            {"name": "solve/bad/x", "run_type": "iteration", "real_time": 0.0, "error_occurred": True},
+            {"name": "triad/n:8", "run_type": "iteration", "real_time": 2.0, "cpu_time": 1.0},
+            {"name": "solve/cg/x", "run_type": "iteration", "real_time": 10.0, "cpu_time": 4.0},
+            {"name": "solve/cg/x_mean", "run_type": "aggregate", "real_time": 10.0, "cpu_time": 4.0},
+            {"name": "solve/bad/x", "run_type": "iteration", "real_time": 0.0, "cpu_time": 0.0, "error_occurred": True},
         ]}
-        self.assertEqual(perf.timed_ratios(gb), {"solve/cg/x": 5.0})
+        self.assertEqual(perf.timed_ratios(gb, "cpu_time"), {"solve/cg/x": 4.0})
+        self.assertEqual(perf.timed_ratios(gb, "real_time"), {"solve/cg/x": 5.0})
+
+    def test_timings_measured_differently_are_not_compared(self):
+        base = metrics_file(self.BASE, ratios={"solve/mgpbd/x": 2.0})
+        cur = metrics_file(self.BASE, ratios={"solve/mgpbd/x": 4.0})
+        base["timing"], cur["timing"] = {"threads": 1}, {"threads": 2}
+        rc, out = gate(base, cur)
+        self.assertEqual(rc, 0, out)
+        self.assertNotIn("SLOWER", out)
 
 
 class GateEndToEnd(unittest.TestCase):
