@@ -486,11 +486,13 @@ TEST(AmgMeasure, DISABLED_Scenes) {
     cg->setup(A, SetupKind::Structure, {});
     const LinearStats cs = cg->solve(s.b, x);
     printf("%s res %d rows %ld nnz %ld: cg %d its solve %.3f s\n", sc.c_str(), res, (long)A.rows(), (long)A.nonZeros(), cs.iterations, cs.solve_time);
-    for (const std::string nk : {"ones", "gs"})
+    for (const std::string nkv : {"ones", "gs", "gs4"})
       for (const std::string sm : {"jacobi", "chebyshev", "gs"})
         for (int sw : {1, 2}) {
+          const std::string nk = nkv == "ones" ? "ones" : "gs";
           p.amg_smoother = sm;
           p.amg_near_kernel = nk;
+          p.amg_near_kernel_vectors = nkv == "gs4" ? 4 : 1;
           p.amg_smoother_sweeps = sw;
           auto mg = make_linear_solver("mgpbd", p);
           mg->setup(A, SetupKind::Structure, {});
@@ -499,7 +501,7 @@ TEST(AmgMeasure, DISABLED_Scenes) {
           const LinearStats ms2 = mg->solve(s.b, x);
           residual(A, x, s.b, r);
           const auto st = mg->statistics();
-          printf("  %s/%s x%d: levels %g oc %.3f gc %.3f its %d (true rel %.1e) setup %.4f refresh %.4f solve %.4f s rows:", nk.c_str(), sm.c_str(), sw,
+          printf("  %s/%s x%d: levels %g oc %.3f gc %.3f its %d (true rel %.1e) setup %.4f refresh %.4f solve %.4f s rows:", nkv.c_str(), sm.c_str(), sw,
                  st.at("levels"), st.at("operator_complexity"), st.at("grid_complexity"), ms.iterations, r.norm() / s.b.norm(),
                  ms.setup_time, ms2.setup_time, ms.solve_time);
           const auto arrays = mg->array_statistics();
