@@ -144,6 +144,9 @@ int cmd_solve(const CommandArgs& argv) {
   const std::string system_path = args.require("--system");
   const std::string out = args.require("--out");
   const auto solvers = parse_methods(args.require("--solver"), true);
+  std::error_code ec;
+  if (fs::exists(out) && fs::equivalent(out, system_path, ec))
+    throw Error("solve: --out " + out + " is the system file itself (it would be replaced by the results)");
   const CapturedSystem sys = read_system_h5(system_path);
   Params p = params_from_system(sys, system_path);
   for (const auto& s : args.all("--set")) apply_set(p, s);

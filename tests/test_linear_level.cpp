@@ -322,6 +322,8 @@ TEST(LinearLevel, BadInputEndsWithAnErrorAndNoFile) {
   EXPECT_THROW(cmd_solve({"--system", prefix + "_A.mtx", "--solver", "cg", "--out", out}), Error);
   EXPECT_THROW(cmd_solve({"--system", prefix + ".h5", "--solver", "cg", "--tol", "-1", "--out", out}), Error);
   EXPECT_THROW(cmd_solve({"--system", prefix + ".h5", "--solver", "cg", "--set", "amg.smoother=nope", "--out", out}), Error);
+  EXPECT_THROW(cmd_solve({"--system", prefix + ".h5", "--solver", "cg", "--out", prefix + ".h5"}), Error);
+  EXPECT_NO_THROW(read_system_h5(prefix + ".h5"));
   EXPECT_FALSE(fs::exists(out));
   // Through the CLI: exit code 2 and no file.
   EXPECT_EQ(cli("solve --system " + dir / "missing.h5" + " --solver cg --out " + out), 2);
