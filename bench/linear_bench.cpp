@@ -25,6 +25,7 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
+#include <cstdio>
 #include <cstring>
 #include <iostream>
 #include <memory>
@@ -201,7 +202,9 @@ int main(int argc, char** argv) {
   benchmark::AddCustomContext("system", s.label);
   benchmark::AddCustomContext("rows", std::to_string(s.A.rows()));
   benchmark::AddCustomContext("nnz", std::to_string(s.A.nonZeros()));
-  benchmark::AddCustomContext("linear.tol", std::to_string(s.p.linear_tol));
+  char tol[32];
+  std::snprintf(tol, sizeof tol, "%g", s.p.linear_tol);
+  benchmark::AddCustomContext("linear.tol", tol);
   benchmark::AddCustomContext("omp_threads", std::to_string(omp_get_max_threads()));
 
   auto reg = [](const std::string& name, auto fn) {
