@@ -102,10 +102,10 @@ def main(argv=None):
         for ax in list(axes.flat)[len(metrics):]:
             ax.axis("off")
         fig.suptitle(f"{title} over {len(runs)} runs (dashed: baseline)", fontsize=10)
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))
         path = f"{a.out}_{key}.png"
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=90)
         plt.close(fig)
         print(f"perf_history: wrote {path} ({len(metrics)} metrics)")
         wrote += 1

@@ -118,6 +118,7 @@ class CompareRules(unittest.TestCase):
         gb = {"benchmarks": [
             {"name": "triad/n:8", "run_type": "iteration", "real_time": 2.0, "cpu_time": 1.0},
             {"name": "solve/cg/x", "run_type": "iteration", "real_time": 10.0, "cpu_time": 4.0},
+            {"name": "solve/cg/x", "run_type": "iteration", "real_time": 12.0, "cpu_time": 6.0},
             {"name": "solve/cg/x_mean", "run_type": "aggregate", "real_time": 10.0, "cpu_time": 4.0},
             {"name": "solve/bad/x", "run_type": "iteration", "real_time": 0.0, "cpu_time": 0.0, "error_occurred": True},
         ]}

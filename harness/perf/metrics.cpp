@@ -115,6 +115,7 @@ void linear_metrics(const std::vector<std::string>& sets, const std::vector<std:
         xb::Vector x;
         const xb::LinearStats st = solver->solve(sys.b, x);
         out.add_text(key + "/status", "status", xb::to_string(st.status));
+        if (!st.message.empty()) out.add_text(key + "/message", "info", st.message);
         out.add(key + "/iterations", "iterations", st.iterations);
         out.add(key + "/final_relative_residual", "info", st.final_relative_residual);
         for (const auto& [k, v] : solver->statistics()) {
@@ -141,6 +142,7 @@ void sim_metrics(const std::vector<std::string>& sets, const std::vector<std::st
       std::cerr << "perf metrics: " << key << "\n";
       const xb::RunResult res = xb::run_simulation(prob, p, method);
       out.add_text(key + "/status", "status", res.status);
+      if (!res.message.empty()) out.add_text(key + "/message", "info", res.message);
       const double substeps = std::max(1, res.substeps_total);
       out.add(key + "/outer_iterations_per_substep", "outer_iterations", res.outer_iterations / substeps);
       out.add(key + "/relative_dual_residual", "info", res.relative_dual_residual);
