@@ -30,22 +30,21 @@ using namespace xb;
 namespace {
 
 // The harness is an MPI program (hypre, muelu; parse_methods asks for the communicator size), so
-// the in-process calls below need MPI initialised, as xpbd-bench's main does.
+// the in-process calls below need MPI initialised, as xpbd-bench's main does. Only the tests of
+// this file start it (on first use), so other tests do not pay for MPI's start-up.
+bool mpi_started_here = false;
+void ensure_mpi() {
+  int done = 0;
+  MPI_Initialized(&done);
+  if (!done) mpi_started_here = MPI_Init(nullptr, nullptr) == MPI_SUCCESS;
+}
 class MpiEnvironment : public ::testing::Environment {
  public:
-  void SetUp() override {
-    int done = 0;
-    MPI_Initialized(&done);
-    if (!done) owned_ = MPI_Init(nullptr, nullptr) == MPI_SUCCESS;
-  }
   void TearDown() override {
     int done = 0;
     MPI_Finalized(&done);
-    if (owned_ && !done) MPI_Finalize();
+    if (mpi_started_here && !done) MPI_Finalize();
   }
-
- private:
-  bool owned_ = false;
 };
 [[maybe_unused]] ::testing::Environment* const mpi_env = ::testing::AddGlobalTestEnvironment(new MpiEnvironment);
 
@@ -62,6 +61,7 @@ struct TempDir {
   OneThread one_thread;
   fs::path path;
   TempDir() {
+    ensure_mpi();
     path = fs::temp_directory_path() / ("xb_linear_" + std::to_string(::getpid()) + "_" +
                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(path);
