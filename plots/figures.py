@@ -125,7 +125,7 @@ def run_spec(name, args, inventory, notes):
         write_spec(spec, spec_path)
     os.makedirs(data_dir, exist_ok=True)
     with open(os.path.join(data_dir, name + ".log"), "a") as log:
-        reason = ensure_meshes(spec, log)
+        reason = None if args.dry_run else ensure_meshes(spec, log)
         if reason:
             notes[name] = (notes.get(name, "") + "; " if name in notes else "") + reason
         cmd = [args.bench, "sweep", spec_path, "--out", out]
