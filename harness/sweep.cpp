@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <set>
 
 namespace fs = std::filesystem;
@@ -174,15 +176,23 @@ SweepSpec parse_sweep_spec(const std::string& path) {
 }
 
 std::string sweep_base_hash(const SweepSpec& spec) {
+  // What the spec fixes, not the whole parameter table: a key added to Params later (with its
+  // default) must not make an existing results file look like another sweep. The scene file's
+  // text stands for the scene's own settings.
+  std::ifstream in(spec.scene, std::ios::binary);
+  std::ostringstream text;
+  text << "scene_file=" << in.rdbuf() << "\n";
   const Params p = base_params(spec);
-  std::string text;
-  for (const auto& f : param_fields()) {
-    bool swept = false;
-    for (const auto& [k, v] : spec.grid) swept = swept || k == f.key;
-    if (!swept) text += f.key + "=" + canonical_value(p, f.key) + "\n";
+  std::vector<std::string> fixed;
+  for (const auto& kv : spec.sets) {
+    const std::string key = kv.substr(0, kv.find('='));
+    fixed.push_back(key + "=" + canonical_value(p, key));
   }
-  text += std::string("reference=") + (spec.reference ? "1" : "0") + "\n";
-  return fnv1a_hex(text);
+  std::sort(fixed.begin(), fixed.end());
+  fixed.erase(std::unique(fixed.begin(), fixed.end()), fixed.end());
+  for (const auto& f : fixed) text << f << "\n";
+  text << "reference=" << (spec.reference ? "1" : "0") << "\n";
+  return fnv1a_hex(text.str());
 }
 
 std::vector<SweepJob> expand_sweep(const SweepSpec& spec) {

@@ -55,8 +55,8 @@ SweepSpec parse_sweep_spec(const std::string& path);
 // validated here, so a bad combination fails before anything runs.
 std::vector<SweepJob> expand_sweep(const SweepSpec& spec);
 
-// A hash (hex) of everything a sweep's runs share: the resolved parameters outside the grid
-// and the reference flag. Runs of one sweep carry it as `sweep_base`.
+// A hash (hex) of what a sweep's runs share: the scene file's text, the fixed overrides ([set],
+// frames; values canonical) and the reference flag. Runs of one sweep carry it as `sweep_base`.
 std::string sweep_base_hash(const SweepSpec& spec);
 
 // A parameter value as short canonical text (doubles as %.15g).
