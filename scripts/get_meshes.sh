@@ -133,6 +133,9 @@ EOF
     rm -f "$work"/coarse.1.* "$work"/surface.1.*
     tetgen "${flags}a$a" -Q "$input" >"$work/tetgen.log" 2>&1 ||
       { tail -20 "$work/tetgen.log" >&2; die "tetgen ${flags}a$a failed on $input"; }
+    # tetgen can exit 0 without a mesh (e.g. a surface with holes or self-intersections).
+    [[ -s "${input%.stl}.1.ele" ]] ||
+      { tail -20 "$work/tetgen.log" >&2; die "tetgen ${flags}a$a made no mesh of $name's surface (see above)"; }
     count="$(head -1 "${input%.stl}.1.ele" | awk '{print $1}')"
     echo "get_meshes.sh: $name:$size: tetgen ${flags}a$a -> $count tets" >&2
     # Within 15%: done; else scale a by the ratio (tets ∝ 1/a while a limits the size).
