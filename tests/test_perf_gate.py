@@ -88,6 +88,13 @@ class CompareRules(unittest.TestCase):
         self.assertEqual(rc, 1, out)
         self.assertIn("mgpbd/status", out)
 
+    def test_counts_of_a_run_that_failed_in_the_baseline_are_not_gated(self):
+        base = dict(self.BASE)
+        base["linear/s/r1/f1i0/mgpbd/status"] = ("status", "breakdown")
+        rc, out = gate(metrics_file(base), metrics_file(self.with_(mgpbd__iterations=300, mgpbd__status="converged")))
+        self.assertEqual(rc, 0, out)
+        self.assertIn("changed (baseline breakdown)", out)
+
     def test_changed_system_size_fails(self):
         rc, out = gate(metrics_file(self.BASE), metrics_file(self.with_(rows=801)))
         self.assertEqual(rc, 1, out)
