@@ -9,20 +9,43 @@
 #include "../problems/error.hpp"
 #include "../problems/params.hpp"
 
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
+#include <thread>
 
 namespace xb {
 
+namespace {
+// main() initialises MPI; library users without it (the unit tests) get it on first use,
+// finalised at exit.
+void ensure_mpi() {
+  int init = 0;
+  MPI_Initialized(&init);
+  if (init) return;
+  MPI_Init(nullptr, nullptr);
+  std::atexit([] {
+    int fin = 0;
+    MPI_Finalized(&fin);
+    if (fin) return;
+    finalize_external_libraries();
+    MPI_Finalize();
+  });
+}
+}  // namespace
+
 int mpi_rank() {
+  ensure_mpi();
   int r = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &r);
   return r;
 }
 
 int mpi_size() {
+  ensure_mpi();
   int s = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &s);
   return s;
@@ -51,6 +74,18 @@ std::unique_ptr<DistributedKernel> make_kernel(const std::string& name, const Pa
 #endif
   (void)p;
   throw Error("solver '" + name + "' has no distributed kernel in this build");
+}
+
+// Every command header goes through this non-blocking broadcast (blocking and non-blocking
+// collectives must not be mixed). Waiting ranks sleep between tests instead of spinning.
+void bcast_header(Header& h) {
+  MPI_Request req;
+  MPI_Ibcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD, &req);
+  for (int done = 0;;) {
+    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+    if (done) break;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
 }
 
 void bcast_string(std::string& s) {
@@ -150,7 +185,7 @@ class DistributedSolver final : public LinearSolver {
     id_ = g_next_id++;
     if (mpi_size() > 1) {
       Header h = {kCreate, id_, 0, 0, 0, 0, 0, 0};
-      MPI_Bcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+      bcast_header(h);
       std::string n = name, text = serialize(p);
       bcast_string(n);
       bcast_string(text);
@@ -160,7 +195,7 @@ class DistributedSolver final : public LinearSolver {
   ~DistributedSolver() override {
     if (mpi_size() > 1) {
       Header h = {kDestroy, id_, 0, 0, 0, 0, 0, 0};
-      MPI_Bcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+      bcast_header(h);
     }
   }
   std::string name() const override { return name_; }
@@ -178,7 +213,7 @@ class DistributedSolver final : public LinearSolver {
     if (np > 1) {
       Header h = {kSetup, id_, kind == SetupKind::Values ? 1 : 0, ctx.frame, ctx.substep, ctx.iteration,
                   values_only ? 1 : 0, n_};
-      MPI_Bcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+      bcast_header(h);
       RowBlock other;
       for (int r = 1; r < np; ++r) {
         extract_block(A, off[r], off[r + 1], other, values_only);
@@ -200,7 +235,7 @@ class DistributedSolver final : public LinearSolver {
     std::vector<double> bl, xl;
     if (mpi_size() > 1) {
       Header h = {kSolve, id_, 0, 0, 0, 0, 0, n_};
-      MPI_Bcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+      bcast_header(h);
       scatter_vector(b.data(), n_, bl);
     } else {
       bl.assign(b.data(), b.data() + b.size());
@@ -262,7 +297,9 @@ int serve_workers() {
   try {
     for (;;) {
       Header h;
-      MPI_Bcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+      // Wait for rank 0 without spinning: between solves rank 0 assembles with OpenMP on the
+      // same cores, and a busy-polling MPI_Bcast would steal them.
+      bcast_header(h);
       const long long id = h[1];
       switch (h[0]) {
         case kCreate: {
@@ -316,7 +353,7 @@ void stop_workers() {
   if (g_workers_stopped || mpi_rank() != 0 || mpi_size() == 1) return;
   g_workers_stopped = true;
   Header h = {kQuit, 0, 0, 0, 0, 0, 0, 0};
-  MPI_Bcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+  bcast_header(h);
 }
 
 #ifdef XB_WITH_MUELU

@@ -232,9 +232,21 @@ fs::path scratch() {
   return d;
 }
 
+// This test process may itself be an MPI singleton (the solvers initialise MPI): the child
+// mpirun must not inherit its Open MPI / PMIx environment.
+std::string clean_env() {
+  std::string unset = "env";
+  for (char** e = environ; *e; ++e) {
+    const std::string kv = *e;
+    const std::string k = kv.substr(0, kv.find('='));
+    if (k.rfind("OMPI_", 0) == 0 || k.rfind("PMIX_", 0) == 0 || k.rfind("OPAL_", 0) == 0) unset += " -u " + k;
+  }
+  return unset + " ";
+}
+
 int sh(const std::string& cmd, std::string* err = nullptr) {
   const std::string e = (scratch() / "err.txt").string();
-  const int st = std::system((cmd + " >" + (scratch() / "out.txt").string() + " 2>" + e).c_str());
+  const int st = std::system((clean_env() + cmd + " >" + (scratch() / "out.txt").string() + " 2>" + e).c_str());
   if (err) {
     std::ifstream f(e);
     std::stringstream s;
