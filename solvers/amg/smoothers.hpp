@@ -30,8 +30,9 @@ Vector inverse_diagonal(const SparseMatrix& A);
 void multicolor_gs_sweep(const SparseMatrix& A, const Vector& inv_diag, const Coloring& coloring, const Vector& b,
                          Vector& x, bool forward);
 
-// Estimate of λ_max(D⁻¹A) (A SPD): `iterations` power steps from v (v is updated, so it can warm
-// start the next estimate; a zero or wrongly sized v is replaced by a seeded random vector).
+// Upper estimate of λ_max(D⁻¹A) (A SPD): max(iterations, 10) Lanczos steps from v, largest Ritz
+// value plus its residual bound, capped by Gershgorin's bound (v is updated to start the next
+// estimate; a zero or wrongly sized v is replaced by a seeded random vector).
 double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector& v, int iterations,
                            unsigned seed = 1);
 
@@ -51,8 +52,8 @@ class Smoother {
 struct SmootherOptions {
   std::string kind = "chebyshev";  // jacobi | chebyshev | gs
   int sweeps = 1;
-  int power_iterations = 20;          // at setup
-  int refresh_power_iterations = 5;   // warm-started, at refresh
+  int power_iterations = 20;          // Lanczos steps at setup
+  int refresh_power_iterations = 10;  // Lanczos steps at refresh
   unsigned seed = 1;
 };
 
