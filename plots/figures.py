@@ -364,7 +364,7 @@ def claim_cloth(S, files, notes, out):
             continue
         s, _, _ = xbruns.cloth_strains(r)
         a = r["attrs"]
-        S.add(claim, f"{a.get('solver')}: max / mean edge strain |p−q|/l0 − 1 after {a.get('frames')} frames "
+        S.add(claim, f"{a.get('solver')}: max / mean edge strain (length/rest − 1) after {a.get('frames')} frames "
                      f"({a.get('resolution')}², stop at dual residual {a.get('atol')})",
               "XPBD visibly stretched, global solve not", f"{s.max():.3g} / {s.mean():.3g}",
               f"{a.get('substeps_converged')}/{a.get('substeps_total')} substeps reached it; {a.get('status')}")
