@@ -27,18 +27,6 @@ namespace xb {
 
 namespace {
 
-std::string attr_text(const RunRecord& r, const std::string& key) {
-  auto it = r.attrs.find(key);
-  if (it == r.attrs.end()) return "-";
-  if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
-  if (auto* d = std::get_if<double>(&it->second)) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.3g", *d);
-    return b;
-  }
-  return std::get<std::string>(it->second);
-}
-
 std::string duration(double s) {
   char b[32];
   if (s < 60) std::snprintf(b, sizeof b, "%.0fs", s);

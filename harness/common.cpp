@@ -194,10 +194,15 @@ std::string json_value(const AttrValue& v) {
     std::snprintf(b, sizeof b, "%.17g", *d);
     return b;
   }
-  return "\"" + json_escape(std::get<std::string>(v)) + "\"";
+  std::string out = "\"";  // built in place: GCC 12 warns (-Wrestrict, falsely) on "\"" + s
+  out += json_escape(std::get<std::string>(v));
+  out += '"';
+  return out;
 }
 
-std::string text(const RunRecord& r, const std::string& key) {
+}  // namespace
+
+std::string attr_text(const RunRecord& r, const std::string& key) {
   auto it = r.attrs.find(key);
   if (it == r.attrs.end()) return "-";
   if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
@@ -208,7 +213,6 @@ std::string text(const RunRecord& r, const std::string& key) {
   }
   return std::get<std::string>(it->second);
 }
-}  // namespace
 
 void print_report(const std::string& path, const std::string& format) {
   const auto runs = read_runs(path, false);
@@ -231,9 +235,9 @@ void print_report(const std::string& path, const std::string& format) {
   for (const auto& [level, cols] : layouts) {
     std::vector<std::vector<std::string>> rows;
     for (const auto& r : runs)
-      if (text(r, "level") == level) {
+      if (attr_text(r, "level") == level) {
         std::vector<std::string> row{r.name};
-        for (const auto& c : cols) row.push_back(text(r, c));
+        for (const auto& c : cols) row.push_back(attr_text(r, c));
         rows.push_back(row);
       }
     if (rows.empty()) continue;

@@ -27,6 +27,9 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
 // "0003_cloth_hang_xpbd-gs": index within the file, then what ran.
 std::string run_name(int index, const std::string& scene, const std::string& solver);
 
+// A run attribute as short text for tables ("-" if absent, numbers with 3 digits).
+std::string attr_text(const RunRecord& r, const std::string& key);
+
 // Prints a report of a results file: "table" or "json".
 void print_report(const std::string& path, const std::string& format);
 

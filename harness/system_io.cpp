@@ -1,5 +1,7 @@
 #include "system_io.hpp"
 
+#include "h5io.hpp"
+
 #include "../problems/error.hpp"
 
 #include <hdf5.h>
@@ -17,78 +19,7 @@ namespace xb {
 
 namespace {
 
-// Closes an HDF5 handle when it goes out of scope.
-struct H {
-  hid_t id;
-  herr_t (*close)(hid_t);
-  H(hid_t i, herr_t (*c)(hid_t)) : id(i), close(c) {}
-  ~H() {
-    if (id >= 0) close(id);
-  }
-  H(const H&) = delete;
-  H& operator=(const H&) = delete;
-  operator hid_t() const { return id; }
-};
-
-void check(herr_t e, const std::string& what) {
-  if (e < 0) throw Error("HDF5: " + what + " failed");
-}
-
-hid_t string_type() {
-  hid_t t = H5Tcopy(H5T_C_S1);
-  H5Tset_size(t, H5T_VARIABLE);
-  H5Tset_cset(t, H5T_CSET_UTF8);
-  return t;
-}
-
-void write_attr(hid_t obj, const std::string& name, const AttrValue& v) {
-  H space(H5Screate(H5S_SCALAR), H5Sclose);
-  if (auto* i = std::get_if<long long>(&v)) {
-    H a(H5Acreate2(obj, name.c_str(), H5T_NATIVE_LLONG, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-    check(a < 0 ? -1 : 0, "attribute " + name);
-    check(H5Awrite(a, H5T_NATIVE_LLONG, i), "write attribute " + name);
-  } else if (auto* d = std::get_if<double>(&v)) {
-    H a(H5Acreate2(obj, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-    check(a < 0 ? -1 : 0, "attribute " + name);
-    check(H5Awrite(a, H5T_NATIVE_DOUBLE, d), "write attribute " + name);
-  } else {
-    H t(string_type(), H5Tclose);
-    H a(H5Acreate2(obj, name.c_str(), t, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-    check(a < 0 ? -1 : 0, "attribute " + name);
-    const char* s = std::get<std::string>(v).c_str();
-    check(H5Awrite(a, t, &s), "write attribute " + name);
-  }
-}
-
-AttrValue read_attr(hid_t a) {
-  H t(H5Aget_type(a), H5Tclose);
-  switch (H5Tget_class(t)) {
-    case H5T_INTEGER: {
-      long long v = 0;
-      check(H5Aread(a, H5T_NATIVE_LLONG, &v), "read attribute");
-      return v;
-    }
-    case H5T_FLOAT: {
-      double v = 0;
-      check(H5Aread(a, H5T_NATIVE_DOUBLE, &v), "read attribute");
-      return v;
-    }
-    case H5T_STRING: {
-      if (H5Tis_variable_str(t)) {
-        char* s = nullptr;
-        H mt(string_type(), H5Tclose);
-        check(H5Aread(a, mt, &s), "read attribute");
-        std::string out = s ? s : "";
-        H5free_memory(s);
-        return out;
-      }
-      std::string out(H5Tget_size(t), '\0');
-      check(H5Aread(a, t, out.data()), "read attribute");
-      return std::string(out.c_str());
-    }
-    default: return std::string("<unsupported>");
-  }
-}
+using namespace h5;
 
 template <class T>
 void write_array(hid_t file, const char* name, const T* data, hsize_t n, hid_t type) {
@@ -116,7 +47,7 @@ std::vector<T> read_array(hid_t file, const std::string& path, const char* name,
 }
 
 struct Silence {  // HDF5 prints error stacks by default; we report our own messages.
-  Silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+  Silence() { silence_errors(); }
 };
 const Silence silence_hdf5;
 
