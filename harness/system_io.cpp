@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <vector>
 
@@ -80,6 +81,24 @@ bool next_data_line(std::istream& in, std::string& line, int& lineno) {
 std::string lower(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
+}
+
+// Writes a text file through PATH.tmp (written by `body`, checked, renamed over PATH), so that
+// readers never see a partial file.
+void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body) {
+  make_parent(path);
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) throw Error("cannot create " + tmp);
+  body(f);
+  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  std::fclose(f);
+  if (!ok) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw Error("cannot write " + tmp);
+  }
+  replace_atomically(path, tmp);
 }
 
 }  // namespace
@@ -171,47 +190,27 @@ CapturedSystem read_system_h5(const std::string& path) {
 }
 
 void write_matrix_market(const std::string& path, const SparseMatrix& A) {
-  make_parent(path);
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) throw Error("cannot create " + tmp);
-  long long lower_nnz = 0;
-  for (int i = 0; i < A.outerSize(); ++i)
-    for (SparseMatrix::InnerIterator it(A, i); it; ++it)
-      if (it.col() <= i) ++lower_nnz;
-  std::fprintf(f, "%%%%MatrixMarket matrix coordinate real symmetric\n");
-  std::fprintf(f, "%% xpbd-bench dual system A (lower triangle, 1-based)\n");
-  std::fprintf(f, "%lld %lld %lld\n", static_cast<long long>(A.rows()), static_cast<long long>(A.cols()), lower_nnz);
-  for (int i = 0; i < A.outerSize(); ++i)
-    for (SparseMatrix::InnerIterator it(A, i); it; ++it)
-      if (it.col() <= i) std::fprintf(f, "%d %d %.17g\n", i + 1, static_cast<int>(it.col()) + 1, it.value());
-  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
-  std::fclose(f);
-  if (!ok) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw Error("cannot write " + tmp);
-  }
-  replace_atomically(path, tmp);
+  write_text_atomically(path, [&](std::FILE* f) {
+    long long lower_nnz = 0;
+    for (int i = 0; i < A.outerSize(); ++i)
+      for (SparseMatrix::InnerIterator it(A, i); it; ++it)
+        if (it.col() <= i) ++lower_nnz;
+    std::fprintf(f, "%%%%MatrixMarket matrix coordinate real symmetric\n");
+    std::fprintf(f, "%% xpbd-bench dual system A (lower triangle, 1-based)\n");
+    std::fprintf(f, "%lld %lld %lld\n", static_cast<long long>(A.rows()), static_cast<long long>(A.cols()), lower_nnz);
+    for (int i = 0; i < A.outerSize(); ++i)
+      for (SparseMatrix::InnerIterator it(A, i); it; ++it)
+        if (it.col() <= i) std::fprintf(f, "%d %d %.17g\n", i + 1, static_cast<int>(it.col()) + 1, it.value());
+  });
 }
 
 void write_matrix_market(const std::string& path, const Vector& b) {
-  make_parent(path);
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) throw Error("cannot create " + tmp);
-  std::fprintf(f, "%%%%MatrixMarket matrix array real general\n");
-  std::fprintf(f, "%% xpbd-bench dual system right-hand side b\n");
-  std::fprintf(f, "%lld 1\n", static_cast<long long>(b.size()));
-  for (long i = 0; i < b.size(); ++i) std::fprintf(f, "%.17g\n", b[i]);
-  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
-  std::fclose(f);
-  if (!ok) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw Error("cannot write " + tmp);
-  }
-  replace_atomically(path, tmp);
+  write_text_atomically(path, [&](std::FILE* f) {
+    std::fprintf(f, "%%%%MatrixMarket matrix array real general\n");
+    std::fprintf(f, "%% xpbd-bench dual system right-hand side b\n");
+    std::fprintf(f, "%lld 1\n", static_cast<long long>(b.size()));
+    for (long i = 0; i < b.size(); ++i) std::fprintf(f, "%.17g\n", b[i]);
+  });
 }
 
 SparseMatrix read_matrix_market_matrix(const std::string& path) {
