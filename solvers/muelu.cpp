@@ -65,6 +65,15 @@ void ensure_tpetra() {
   g_tpetra_started = true;
 }
 
+// Teuchos exceptions span several lines (file, throw number, test); the last one says what.
+std::string last_line(const std::string& text) {
+  std::istringstream is(text);
+  std::string line, last;
+  while (std::getline(is, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  return last.empty() ? text : last;
+}
+
 // Records ‖r_k‖₂ = (relative residual of `conv`)·‖b‖₂ with a time stamp at every check.
 class HistoryTest final : public Belos::StatusTest<SC, MV, OP> {
  public:
@@ -135,7 +144,12 @@ class MueLuKernel final : public DistributedKernel {
     const std::string& s = p.muelu_smoother;
     if (s == "chebyshev") {
       L.set("smoother: type", "CHEBYSHEV");
-      L.sublist("smoother: params").set("chebyshev: degree", p.muelu_smoother_sweeps);
+      auto& sp = L.sublist("smoother: params");
+      sp.set("chebyshev: degree", p.muelu_smoother_sweeps);
+      // Ifpack2's default 10 power iterations can underestimate lambda_max(D^-1 A) on these
+      // systems; Chebyshev then amplifies the top of the spectrum, the V-cycle is indefinite and
+      // CG breaks down (seen on a 96-row bar on 2 ranks) - the same failure mgpbd had.
+      sp.set("chebyshev: eigenvalue max iterations", 50);
     } else if (s == "jacobi" || s == "sgs") {
       L.set("smoother: type", "RELAXATION");
       auto& sp = L.sublist("smoother: params");
@@ -175,16 +189,11 @@ class MueLuKernel final : public DistributedKernel {
       map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(blk.n_global), static_cast<size_t>(blk.rows()), 0, comm_));
       std::vector<size_t> per_row(blk.rows());
       for (int i = 0; i < blk.rows(); ++i) per_row[i] = blk.rowptr[i + 1] - blk.rowptr[i];
-      // An explicit column map in ascending global order: local column order = global order, so
-      // every row's entries stay sorted by global index. With Tpetra's default column map (own
-      // columns first, remote ones after) the Amesos2 direct solver on a distributed matrix did
-      // not match A (‖M⁻¹Av − v‖ ≈ 400‖v‖ on 2 ranks with one level).
-      std::vector<GO> colids(blk.cols.begin(), blk.cols.end());
-      std::sort(colids.begin(), colids.end());
-      colids.erase(std::unique(colids.begin(), colids.end()), colids.end());
-      auto colmap = rcp(new Map(Teuchos::OrdinalTraits<Tpetra::global_size_t>::invalid(),
-                                Teuchos::ArrayView<const GO>(colids.data(), colids.size()), 0, comm_));
-      A_ = rcp(new CrsMatrix(map_, colmap, Teuchos::ArrayView<const size_t>(per_row.data(), per_row.size())));
+      // Tpetra builds the column map (own columns first, in row-map order): MueLu's uncoupled
+      // aggregation assumes a row's local index is also its local column index. A column map
+      // sorted by global index broke that on ranks > 0 (TentativePFactory: "fine level NS part
+      // has a zero column" on a 49K-row cloth system, 2 ranks).
+      A_ = rcp(new CrsMatrix(map_, Teuchos::ArrayView<const size_t>(per_row.data(), per_row.size())));
       for (int i = 0; i < blk.rows(); ++i) {
         const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
         A_->insertGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
@@ -208,7 +217,12 @@ class MueLuKernel final : public DistributedKernel {
         if (blk.n_global <= p_.muelu_coarse_size)
           L.set("coarse: max size", static_cast<int>(std::max<long long>(1, blk.n_global / 4)));
       }
-      prec_ = MueLu::CreateTpetraPreconditioner(RCP<OP>(A_), L);
+      try {
+        prec_ = MueLu::CreateTpetraPreconditioner(RCP<OP>(A_), L);
+      } catch (const std::exception& e) {
+        prec_ = Teuchos::null;
+        throw Error("muelu setup: " + last_line(e.what()));
+      }
       built_frame_ = ctx.frame;
       action_ = kind == SetupKind::Structure ? "structure" : "values";
       ++full_setups_;
@@ -262,7 +276,7 @@ class MueLuKernel final : public DistributedKernel {
       st.status = conv->getStatus() == Belos::Passed ? LinearStatus::converged : LinearStatus::max_iterations;
     } catch (const Belos::CGIterateFailure& e) {
       st.status = LinearStatus::breakdown;
-      st.message = std::string("Belos CG: ") + e.what();
+      st.message = "Belos CG: " + last_line(e.what());
     }
     problem->setCurrLS();
     st.iterations = cg.getNumIters();
