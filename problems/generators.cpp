@@ -38,16 +38,19 @@ TriMesh make_cloth_grid(int N, double size, double y) {
   for (int i = 0; i < n1; ++i)
     for (int k = 0; k < n1; ++k) m.vertices.col(i * n1 + k) = Eigen::Vector3d(size * k / N, y, size * i / N);
   auto id = [n1](int i, int k) { return i * n1 + k; };
-  for (int i = 0; i < n1; ++i)
+  // Edges strip by strip (row i's horizontal edges, then the vertical and diagonal edges up to
+  // row i + 1), so that a contiguous block of constraint rows is a band of the cloth: the MPI
+  // solvers split A into contiguous row blocks.
+  for (int i = 0; i < n1; ++i) {
     for (int k = 0; k < N; ++k) m.edges.push_back({id(i, k), id(i, k + 1)});
-  for (int i = 0; i < N; ++i)
+    if (i == N) break;
     for (int k = 0; k < n1; ++k) m.edges.push_back({id(i, k), id(i + 1, k)});
-  for (int i = 0; i < N; ++i)
     for (int k = 0; k < N; ++k) {
       m.edges.push_back({id(i, k), id(i + 1, k + 1)});
       m.triangles.push_back({id(i, k), id(i + 1, k + 1), id(i, k + 1)});
       m.triangles.push_back({id(i, k), id(i + 1, k), id(i + 1, k + 1)});
     }
+  }
   return m;
 }
 
