@@ -44,9 +44,22 @@ class DistributedKernel {
   // b and x are this rank's blocks (x is written). Zero initial guess. The returned
   // residual_history is the global one (all ranks get the same numbers).
   virtual LinearStats solve(const std::vector<double>& b, std::vector<double>& x) = 0;
-  virtual std::map<std::string, double> statistics() const { return {}; }
-  virtual std::map<std::string, std::vector<double>> array_statistics() const { return {}; }
-  virtual std::string last_setup_action() const { return ""; }
+
+  // The hierarchy of the last setup: levels, complexities, setup counts, level sizes.
+  std::map<std::string, double> statistics() const;
+  std::map<std::string, std::vector<double>> array_statistics() const;
+  std::string last_setup_action() const { return action_; }
+
+ protected:
+  // A setup that built a new hierarchy (full) or reused one; `action` is what is logged.
+  void record_setup(const std::string& action, bool full);
+  // Global rows and non-zeros per level (0 where this rank cannot see a level).
+  void record_levels(std::vector<double> rows, std::vector<double> nnz);
+
+ private:
+  std::string action_;
+  long long full_setups_ = 0, reused_setups_ = 0;
+  std::vector<double> level_rows_, level_nnz_;
 };
 
 // Whether a method can run with more than one MPI process (hypre, muelu).

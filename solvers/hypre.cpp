@@ -147,11 +147,9 @@ class HypreKernel final : public DistributedKernel {
       ij_amg_ = ij_;
       build_amg();
       built_frame_ = ctx.frame;
-      action_ = kind == SetupKind::Structure ? "structure" : "values";
-      ++full_setups_;
+      record_setup(kind == SetupKind::Structure ? "structure" : "values", true);
     } else {
-      action_ = "reuse-hierarchy";
-      ++reused_setups_;
+      record_setup("reuse-hierarchy", false);
     }
     // PCG is cheap to set up; a fresh one per matrix keeps its work vectors and matvec current.
     HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &pcg_);
@@ -220,18 +218,6 @@ class HypreKernel final : public DistributedKernel {
     return st;
   }
 
-  std::map<std::string, double> statistics() const override {
-    return {{"levels", levels_},
-            {"operator_complexity", op_complexity_},
-            {"grid_complexity", grid_complexity_},
-            {"setup_full", static_cast<double>(full_setups_)},
-            {"setup_reused", static_cast<double>(reused_setups_)}};
-  }
-  std::map<std::string, std::vector<double>> array_statistics() const override {
-    return {{"level_rows", level_rows_}, {"level_nnz", level_nnz_}};
-  }
-  std::string last_setup_action() const override { return action_; }
-
  private:
   void build_amg() {
     HYPRE_BoomerAMGCreate(&amg_);
@@ -254,19 +240,13 @@ class HypreKernel final : public DistributedKernel {
     auto* data = reinterpret_cast<hypre_ParAMGData*>(amg_);
     const int nl = hypre_ParAMGDataNumLevels(data);
     hypre_ParCSRMatrix** As = hypre_ParAMGDataAArray(data);
-    level_rows_.assign(nl, 0);
-    level_nnz_.assign(nl, 0);
-    double rows = 0, nnz = 0;
+    std::vector<double> rows(nl), nnz(nl);
     for (int l = 0; l < nl; ++l) {
       hypre_ParCSRMatrixSetNumNonzeros(As[l]);
-      level_rows_[l] = static_cast<double>(hypre_ParCSRMatrixGlobalNumRows(As[l]));
-      level_nnz_[l] = static_cast<double>(hypre_ParCSRMatrixNumNonzeros(As[l]));
-      rows += level_rows_[l];
-      nnz += level_nnz_[l];
+      rows[l] = static_cast<double>(hypre_ParCSRMatrixGlobalNumRows(As[l]));
+      nnz[l] = static_cast<double>(hypre_ParCSRMatrixNumNonzeros(As[l]));
     }
-    levels_ = nl;
-    op_complexity_ = nl && level_nnz_[0] > 0 ? nnz / level_nnz_[0] : 0;
-    grid_complexity_ = nl && level_rows_[0] > 0 ? rows / level_rows_[0] : 0;
+    record_levels(std::move(rows), std::move(nnz));
   }
 
   void make_vector(HYPRE_IJVector& ij, HYPRE_ParVector& v) {
@@ -313,10 +293,6 @@ class HypreKernel final : public DistributedKernel {
   HYPRE_Solver amg_ = nullptr, pcg_ = nullptr;
   LoggedAmg logged_;
   int built_frame_ = 0;
-  std::string action_;
-  long long full_setups_ = 0, reused_setups_ = 0;
-  double levels_ = 0, op_complexity_ = 0, grid_complexity_ = 0;
-  std::vector<double> level_rows_, level_nnz_;
 };
 
 }  // namespace

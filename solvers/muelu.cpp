@@ -224,12 +224,10 @@ class MueLuKernel final : public DistributedKernel {
         throw Error("muelu setup: " + last_line(e.what()));
       }
       built_frame_ = ctx.frame;
-      action_ = kind == SetupKind::Structure ? "structure" : "values";
-      ++full_setups_;
+      record_setup(kind == SetupKind::Structure ? "structure" : "values", true);
     } else {
       MueLu::ReuseTpetraPreconditioner(A_, *prec_);
-      action_ = "reuse-" + p_.muelu_reuse;
-      ++reused_setups_;
+      record_setup("reuse-" + p_.muelu_reuse, false);
     }
     collect_statistics();
   }
@@ -285,26 +283,11 @@ class MueLuKernel final : public DistributedKernel {
     return st;
   }
 
-  std::map<std::string, double> statistics() const override {
-    return {{"levels", levels_},
-            {"operator_complexity", op_complexity_},
-            {"grid_complexity", grid_complexity_},
-            {"setup_full", static_cast<double>(full_setups_)},
-            {"setup_reused", static_cast<double>(reused_setups_)}};
-  }
-  std::map<std::string, std::vector<double>> array_statistics() const override {
-    return {{"level_rows", level_rows_}, {"level_nnz", level_nnz_}};
-  }
-  std::string last_setup_action() const override { return action_; }
-
  private:
   void collect_statistics() {
     auto H = prec_->GetHierarchy();
     const int nl = H->GetNumLevels();
-    levels_ = nl;
-    level_rows_.assign(nl, 0);
-    level_nnz_.assign(nl, 0);
-    double rows = 0, nnz = 0;
+    std::vector<double> rows(nl, 0.0), nnz(nl, 0.0);
     for (int l = 0; l < nl; ++l) {
       auto level = H->GetLevel(l);
       // A rank left out of a repartitioned level has no matrix there (rank 0 always has one).
@@ -316,13 +299,10 @@ class MueLuKernel final : public DistributedKernel {
         continue;  // stored as an Operator on a rank without rows there
       }
       if (Al.is_null()) continue;
-      level_rows_[l] = static_cast<double>(Al->getGlobalNumRows());
-      level_nnz_[l] = static_cast<double>(Al->getGlobalNumEntries());
-      rows += level_rows_[l];
-      nnz += level_nnz_[l];
+      rows[l] = static_cast<double>(Al->getGlobalNumRows());
+      nnz[l] = static_cast<double>(Al->getGlobalNumEntries());
     }
-    op_complexity_ = nl && level_nnz_[0] > 0 ? nnz / level_nnz_[0] : 0;
-    grid_complexity_ = nl && level_rows_[0] > 0 ? rows / level_rows_[0] : 0;
+    record_levels(std::move(rows), std::move(nnz));
   }
 
   Params p_;
@@ -333,10 +313,6 @@ class MueLuKernel final : public DistributedKernel {
   RCP<Prec> prec_;
   long long n_global_ = -1, first_ = -1;
   int built_frame_ = 0;
-  std::string action_;
-  long long full_setups_ = 0, reused_setups_ = 0;
-  double levels_ = 0, op_complexity_ = 0, grid_complexity_ = 0;
-  std::vector<double> level_rows_, level_nnz_;
 };
 
 }  // namespace

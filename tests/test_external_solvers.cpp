@@ -257,6 +257,22 @@ int sh(const std::string& cmd, std::string* err = nullptr) {
 }
 
 long long attr_int(const RunRecord& r, const std::string& k) { return std::get<long long>(r.attrs.at(k)); }
+
+// Runs `xpbd-bench ARGS FILE` with one process (into one) and under mpirun with two ranks (into
+// two); returns both files' runs, each expected to hold hypre's and muelu's.
+std::pair<std::vector<RunRecord>, std::vector<RunRecord>> one_and_two_ranks(const std::string& args,
+                                                                            const std::string& one,
+                                                                            const std::string& two) {
+  fs::remove(one);
+  fs::remove(two);
+  std::string err;
+  EXPECT_EQ(sh(bench + args + one, &err), 0) << err;
+  EXPECT_EQ(sh(mpirun + bench + args + two, &err), 0) << err;
+  auto r1 = read_runs(one, false), r2 = read_runs(two, false);
+  EXPECT_EQ(r1.size(), 2u);
+  EXPECT_EQ(r2.size(), 2u);
+  return {r1, r2};
+}
 }  // namespace
 
 // The same small simulation with one process and with two: both ok, outer iterations within ±2,
@@ -264,15 +280,11 @@ long long attr_int(const RunRecord& r, const std::string& k) { return std::get<l
 TEST(ExternalSolverMpi, TwoRanksMatchOneProcess) {
   const std::string args =
       " run --scene bar_hang --solver hypre,muelu --set resolution=2 --set aspect=2 --out ";
-  const std::string one = (scratch() / "np1.h5").string(), two = (scratch() / "np2.h5").string();
-  fs::remove(one);
-  fs::remove(two);
-  std::string err;
-  ASSERT_EQ(sh(bench + args + one, &err), 0) << err;
-  ASSERT_EQ(sh(mpirun + bench + args + two, &err), 0) << err;
-  const auto r1 = read_runs(one, false), r2 = read_runs(two, false);
+  const std::string two = (scratch() / "np2.h5").string();
+  const auto [r1, r2] = one_and_two_ranks(args, (scratch() / "np1.h5").string(), two);
   ASSERT_EQ(r1.size(), 2u);
   ASSERT_EQ(r2.size(), 2u);
+  std::string err;
   for (size_t i = 0; i < 2; ++i) {
     EXPECT_EQ(std::get<std::string>(r2[i].attrs.at("status")), "ok") << r2[i].name;
     EXPECT_EQ(std::get<std::string>(r1[i].attrs.at("status")), "ok") << r1[i].name;
@@ -312,13 +324,8 @@ void expect_two_ranks_match_one_process(const std::string& scene, int resolution
                &err),
             0)
       << err;
-  const std::string one = prefix + "_np1.h5", two = prefix + "_np2.h5";
-  fs::remove(one);
-  fs::remove(two);
-  const std::string args = " solve --system " + prefix + ".h5 --solver hypre,muelu --out ";
-  ASSERT_EQ(sh(bench + args + one, &err), 0) << err;
-  ASSERT_EQ(sh(mpirun + bench + args + two, &err), 0) << err;
-  const auto r1 = read_runs(one, false), r2 = read_runs(two, false);
+  const auto [r1, r2] =
+      one_and_two_ranks(" solve --system " + prefix + ".h5 --solver hypre,muelu --out ", prefix + "_np1.h5", prefix + "_np2.h5");
   ASSERT_EQ(r1.size(), 2u);
   ASSERT_EQ(r2.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
