@@ -36,14 +36,18 @@ struct Params {
   int threads = 0;                   // OpenMP threads, 0 = OpenMP's default
   int seed = 1;
   // --- linear solvers ---
+  // The form of every global method's linear step: dual (A Δλ = b) | primal (K Δx = Jᵀα̃⁻¹b,
+  // then Δλ = α̃⁻¹(b − JΔx); needs every α̃ > 0) | auto (primal when every α̃ > 0, else dual).
+  std::string form = "dual";
   double linear_tol = 1e-8;          // ‖r‖₂ ≤ tol·‖b‖₂
   int linear_max_iterations = 1000;
   // --- in-house MGPBD AMG ---
   double amg_strength_threshold = 0.25;
   std::string amg_aggregation = "standard";
-  std::string amg_near_kernel = "ones";  // ones | gs
+  std::string amg_near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | rigid
   int amg_near_kernel_sweeps = 20;
   int amg_near_kernel_vectors = 1;
+  std::string amg_prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
   std::string amg_smoother = "chebyshev";  // jacobi | chebyshev | gs
   int amg_smoother_sweeps = 1;
   int amg_setup_interval = 20;       // frames between rebuilds of aggregates and P
@@ -57,7 +61,7 @@ struct Params {
   int hypre_max_levels = 25;
   std::string hypre_reuse = "none";  // none | hierarchy (keep the last hierarchy for Values setups)
   // --- Trilinos MueLu ---
-  std::string muelu_algorithm = "unsmoothed";  // unsmoothed | sa
+  std::string muelu_algorithm = "auto";  // auto (unsmoothed dual, sa primal) | unsmoothed | sa
   std::string muelu_smoother = "chebyshev";  // chebyshev | jacobi | gs | sgs
   int muelu_smoother_sweeps = 1;
   int muelu_coarse_size = 400;

@@ -24,6 +24,11 @@ class CgSolver final : public LinearSolver {
     setup_time_ = t.seconds();
   }
 
+  bool set_relative_residual(RelativeResidual rel) override {
+    rel_ = std::move(rel);
+    return true;
+  }
+
   LinearStats solve(const Vector& b, Vector& x) override {
     Preconditioner M;
     if (jacobi_)
@@ -32,7 +37,7 @@ class CgSolver final : public LinearSolver {
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < r.size(); ++i) z[i] = inv_diag_[i] * r[i];
       };
-    LinearStats st = pcg(*A_, b, x, M, tol_, maxit_);
+    LinearStats st = pcg(*A_, b, x, M, tol_, maxit_, rel_);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
@@ -44,6 +49,7 @@ class CgSolver final : public LinearSolver {
   bool jacobi_;
   const SparseMatrix* A_ = nullptr;
   Vector inv_diag_;
+  RelativeResidual rel_;
   double setup_time_ = 0;
 };
 }  // namespace

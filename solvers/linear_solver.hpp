@@ -1,9 +1,14 @@
 // The LinearSolver interface: every global method of the harness (cholmod, cg, jacobi-pcg,
-// mgpbd, hypre, muelu) solves A Δλ = b through it. Solvers see only a CSR matrix and vectors.
+// mgpbd, hypre, muelu) solves one SPD system through it — the dual A Δλ = b or the primal
+// K Δx = f (harness/sim/global_step.hpp). Solvers see only a CSR matrix, its block size, an
+// optional near-kernel basis and vectors.
 #pragma once
 
 #include "../problems/sparse.hpp"
 
+#include <Eigen/Dense>
+
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -19,13 +24,24 @@ struct Params;
 //             (CHOLMOD's analysis, AMG aggregates and P, ...). It must still be correct.
 enum class SetupKind { Structure, Values };
 
-// Context of a setup() call in a simulation: lets a solver apply its lazy-setup policy
-// (e.g. mgpbd rebuilds P every amg.setup_interval frames). On the linear level frame = 0.
+// Context of a setup() call: where in a simulation it happens (lets a solver apply its lazy-setup
+// policy; on the linear level frame = 0) and what is known about the matrix beyond its entries.
 struct SetupContext {
   int frame = 0;
   int substep = 0;
   int iteration = 0;
+  // Unknowns per node, stored node-major (rows b·i … b·i+b−1 belong to node i): 1 for the dual
+  // system, 3 for the primal form (one particle's x, y, z).
+  int block_size = 1;
+  // n × k near-kernel basis (the primal form's 6 rigid-body modes at the current positions), or
+  // null. Valid during setup() only: a solver that needs it later keeps a copy.
+  const Eigen::MatrixXd* near_kernel = nullptr;
 };
+
+// The relative residual a solve is judged by, from the solver's residual vector r: by default
+// ‖r‖₂/‖b‖₂. The primal form judges K's residual by the dual residual it implies,
+// ‖J M⁻¹ r_K‖₂ / ‖b_dual‖₂, so both forms stop on one criterion.
+using RelativeResidual = std::function<double(const Vector& r)>;
 
 enum class LinearStatus {
   converged,       // ‖b − Ax‖₂ ≤ tol·‖b‖₂
@@ -59,6 +75,14 @@ class LinearSolver {
   // x is resized by the solver. Returns the statistics of this solve; setup_time is that of
   // the setup() call that preceded it (0 if none did).
   virtual LinearStats solve(const Vector& b, Vector& x) = 0;
+
+  // Judge convergence (and the residual history) by `rel` instead of ‖r‖₂/‖b‖₂ from now on. Only
+  // solvers whose Krylov loop is in-house can: they return true. The others return false and the
+  // caller refines (solves again for the remaining residual) until `rel` is met.
+  virtual bool set_relative_residual(RelativeResidual rel) {
+    (void)rel;
+    return false;
+  }
 
   // Scalar statistics of the current setup for the results (e.g. "levels",
   // "operator_complexity", "setup_kind_structure"). Keys are HDF5 attribute names.

@@ -8,13 +8,14 @@
 namespace xb {
 
 LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Preconditioner& precond, double tol,
-                int max_iterations) {
+                int max_iterations, const RelativeResidual& rel) {
   LinearStats st;
   Timer clock;
   const long n = b.size();
   x = Vector::Zero(n);
   Vector r = b, z(n), p(n), Ap(n);
   const double bnorm = norm2(b);
+  auto relative = [&](const Vector& res) { return rel ? rel(res) : norm2(res) / bnorm; };
   st.residual_history.push_back(bnorm);
   st.residual_time.push_back(clock.seconds());
   if (!std::isfinite(bnorm)) {
@@ -48,7 +49,7 @@ LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Precond
     axpy(alpha, p, x);
     axpy(-alpha, Ap, r);
     st.iterations = k + 1;
-    const double rnorm = norm2(r);
+    const double rnorm = relative(r) * bnorm;
     st.residual_history.push_back(rnorm);
     st.residual_time.push_back(clock.seconds());
     if (!std::isfinite(rnorm)) {
@@ -70,7 +71,7 @@ LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Precond
   st.solve_time = clock.seconds();
   Vector rtrue;
   residual(A, x, b, rtrue);
-  st.final_relative_residual = norm2(rtrue) / bnorm;
+  st.final_relative_residual = relative(rtrue);
   return st;
 }
 

@@ -11,10 +11,11 @@ namespace xb {
 // z = M⁻¹ r; must be symmetric positive definite for CG to be correct.
 using Preconditioner = std::function<void(const Vector& r, Vector& z)>;
 
-// The recurrence residual is checked against tol; on exit the true residual ‖b − Ax‖₂ is
+// The recurrence residual is checked against tol; on exit the true residual b − Ax is
 // recomputed and reported as final_relative_residual (so a drifted recurrence cannot
-// pass for converged). A null preconditioner means plain CG.
+// pass for converged). A null preconditioner means plain CG. `rel` (if set) measures the
+// relative residual instead of ‖r‖₂/‖b‖₂; the residual history then holds rel(r)·‖b‖₂.
 LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Preconditioner& precond, double tol,
-                int max_iterations);
+                int max_iterations, const RelativeResidual& rel = nullptr);
 
 }  // namespace xb

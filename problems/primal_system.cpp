@@ -1,0 +1,203 @@
+#include "primal_system.hpp"
+
+#include "error.hpp"
+#include "problem.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+namespace xb {
+
+ConstraintGraph constraint_graph(const Problem& prob) {
+  ConstraintGraph g;
+  g.particles.resize(prob.num_constraints());
+  for (int j = 0; j < prob.num_constraints(); ++j) g.particles[j] = prob.constraint_particles(j);
+  g.w = prob.particles.w;
+  return g;
+}
+
+std::string resolve_form(const std::string& requested, const Eigen::VectorXd& alpha_tilde) {
+  if (requested == "dual") return "dual";
+  if (requested != "primal" && requested != "auto")
+    throw Error("form: unknown form '" + requested + "' (valid: dual, primal, auto)");
+  long rigid = 0;
+  for (long j = 0; j < alpha_tilde.size(); ++j) rigid += !(alpha_tilde[j] > 0);
+  if (rigid == 0) return "primal";
+  if (requested == "auto") return "dual";
+  throw Error("form=primal needs every constraint compliant (alpha~ > 0), but " + std::to_string(rigid) + " of " +
+              std::to_string(alpha_tilde.size()) +
+              " constraints have compliance 0: K = M + J^T alpha~^-1 J does not exist (use form=dual or form=auto)");
+}
+
+PrimalSystem::PrimalSystem(ConstraintGraph graph) : graph_(std::move(graph)) {
+  const int n = graph_.num_particles();
+  const int m = graph_.num_constraints();
+  block_of_.assign(n, -1);
+  for (int p = 0; p < n; ++p)
+    if (graph_.w[p] > 0) {
+      block_of_[p] = static_cast<int>(free_.size());
+      free_.push_back(p);
+    }
+  const int nb = static_cast<int>(free_.size());
+  // Free particle → (constraint, slot) incidence.
+  inc_start_.assign(nb + 1, 0);
+  for (const auto& ps : graph_.particles)
+    for (int p : ps) {
+      if (p >= n) throw Error("primal system: constraint particle " + std::to_string(p) + " out of range");
+      if (p >= 0 && block_of_[p] >= 0) ++inc_start_[block_of_[p] + 1];
+    }
+  std::partial_sum(inc_start_.begin(), inc_start_.end(), inc_start_.begin());
+  inc_.resize(inc_start_[nb]);
+  {
+    std::vector<int> pos(inc_start_.begin(), inc_start_.end() - 1);
+    for (int j = 0; j < m; ++j)
+      for (int s = 0; s < 4; ++s) {
+        const int p = graph_.particles[j][s];
+        if (p >= 0 && block_of_[p] >= 0) inc_[pos[block_of_[p]]++] = j << 2 | s;
+      }
+  }
+
+  // Per node row: (column node, term) pairs of every shared constraint, sorted by column.
+  std::vector<std::vector<std::pair<int, std::int64_t>>> row(nb);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (int p = 0; p < nb; ++p) {
+    auto& r = row[p];
+    r.push_back({p, -1});  // the mass block exists even without constraints
+    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
+      const int j = inc_[k] >> 2, sp = inc_[k] & 3;
+      for (int sq = 0; sq < 4; ++sq) {
+        const int q = graph_.particles[j][sq];
+        if (q >= 0 && block_of_[q] >= 0) r.push_back({block_of_[q], std::int64_t(j) << 4 | sp << 2 | sq});
+      }
+    }
+    std::stable_sort(r.begin(), r.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  }
+  block_start_.assign(nb + 1, 0);
+  for (int p = 0; p < nb; ++p) {
+    int blocks = 0;
+    for (size_t k = 0; k < row[p].size(); ++k) blocks += k == 0 || row[p][k].first != row[p][k - 1].first;
+    block_start_[p + 1] = block_start_[p] + blocks;
+  }
+  const int nblk = block_start_[nb];
+  block_col_.resize(nblk);
+  term_start_.assign(nblk + 1, 0);
+  for (int p = 0; p < nb; ++p) {
+    int blk = block_start_[p] - 1;
+    for (size_t k = 0; k < row[p].size(); ++k) {
+      if (k == 0 || row[p][k].first != row[p][k - 1].first) block_col_[++blk] = row[p][k].first;
+      if (row[p][k].second >= 0) ++term_start_[blk + 1];
+    }
+  }
+  std::partial_sum(term_start_.begin(), term_start_.end(), term_start_.begin());
+  terms_.resize(term_start_[nblk]);
+  for (int p = 0; p < nb; ++p) {
+    int blk = block_start_[p] - 1, pos = 0;
+    for (size_t k = 0; k < row[p].size(); ++k) {
+      if (k == 0 || row[p][k].first != row[p][k - 1].first) pos = term_start_[++blk];
+      if (row[p][k].second >= 0) terms_[pos++] = row[p][k].second;
+    }
+  }
+
+  // Scalar CSR: node row p has 3 rows of 3·(its blocks) entries each, columns 3q, 3q+1, 3q+2.
+  K_.resize(3 * nb, 3 * nb);
+  K_.resizeNonZeros(9L * nblk);
+  int* outer = K_.outerIndexPtr();
+  int* cols = K_.innerIndexPtr();
+  for (int p = 0; p < nb; ++p) {
+    const int nbp = block_start_[p + 1] - block_start_[p];
+    for (int r = 0; r < 3; ++r) {
+      const int start = 9 * block_start_[p] + 3 * nbp * r;
+      outer[3 * p + r] = start;
+      for (int k = 0; k < nbp; ++k)
+        for (int c = 0; c < 3; ++c) cols[start + 3 * k + c] = 3 * block_col_[block_start_[p] + k] + c;
+    }
+  }
+  outer[3 * nb] = 9 * nblk;
+  std::fill(K_.valuePtr(), K_.valuePtr() + 9L * nblk, 0.0);
+}
+
+void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde) {
+  const int nb = static_cast<int>(free_.size());
+  for (long j = 0; j < alpha_tilde.size(); ++j)
+    if (!(alpha_tilde[j] > 0))
+      throw Error("primal system: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
+                  " (the primal form needs every alpha~ > 0)");
+  double* val = K_.valuePtr();
+#pragma omp parallel for schedule(static)
+  for (int p = 0; p < nb; ++p) {
+    const int nbp = block_start_[p + 1] - block_start_[p];
+    for (int k = 0; k < nbp; ++k) {
+      const int blk = block_start_[p] + k;
+      Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+      for (int t = term_start_[blk]; t < term_start_[blk + 1]; ++t) {
+        const std::int64_t term = terms_[t];
+        const int j = static_cast<int>(term >> 4), sp = (term >> 2) & 3, sq = term & 3;
+        B.noalias() += grad[j][sp] * grad[j][sq].transpose() / alpha_tilde[j];
+      }
+      if (block_col_[blk] == p) B.diagonal().array() += 1.0 / graph_.w[free_[p]];
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) val[9 * block_start_[p] + 3 * nbp * r + 3 * k + c] = B(r, c);
+    }
+  }
+}
+
+void PrimalSystem::apply_J(const Gradients& grad, const Vector& v, Vector& out) const {
+  const int m = graph_.num_constraints();
+  out.resize(m);
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) {
+    double s = 0;
+    for (int a = 0; a < 4; ++a) {
+      const int p = graph_.particles[j][a];
+      if (p >= 0 && block_of_[p] >= 0) s += grad[j][a].dot(v.segment<3>(3 * block_of_[p]));
+    }
+    out[j] = s;
+  }
+}
+
+void PrimalSystem::apply_JT(const Gradients& grad, const Eigen::VectorXd& y, Vector& out) const {
+  const int nb = static_cast<int>(free_.size());
+  out.resize(3 * nb);
+#pragma omp parallel for schedule(static)
+  for (int p = 0; p < nb; ++p) {
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) acc += grad[inc_[k] >> 2][inc_[k] & 3] * y[inc_[k] >> 2];
+    out.segment<3>(3 * p) = acc;
+  }
+}
+
+void PrimalSystem::rhs(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Vector& b, Vector& f) const {
+  apply_JT(grad, b.cwiseQuotient(alpha_tilde), f);
+}
+
+void PrimalSystem::recover(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Vector& b,
+                           const Vector& dx, Vector& dlambda) const {
+  apply_J(grad, dx, dlambda);
+  dlambda = (b - dlambda).cwiseQuotient(alpha_tilde);
+}
+
+void PrimalSystem::dual_residual(const Gradients& grad, const Vector& r_K, Vector& out) const {
+  Vector minv_r(r_K.size());
+  for (int p = 0; p < static_cast<int>(free_.size()); ++p)
+    minv_r.segment<3>(3 * p) = graph_.w[free_[p]] * r_K.segment<3>(3 * p);
+  apply_J(grad, minv_r, out);
+  out = -out;
+}
+
+Eigen::MatrixXd PrimalSystem::rigid_modes(const Eigen::Matrix3Xd& x) const {
+  const int nb = static_cast<int>(free_.size());
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int p : free_) c += x.col(p);
+  if (nb > 0) c /= nb;
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * nb, 6);
+  for (int i = 0; i < nb; ++i) {
+    const Eigen::Vector3d d = x.col(free_[i]) - c;
+    for (int k = 0; k < 3; ++k) {
+      B(3 * i + k, k) = 1;
+      B.block<3, 1>(3 * i, 3 + k) = Eigen::Vector3d::Unit(k).cross(d);
+    }
+  }
+  return B;
+}
+
+}  // namespace xb
