@@ -10,7 +10,7 @@
 // the scene when capturing and to the solvers (e.g. --xb_set=amg.smoother=jacobi, linear.tol=1e-6).
 // Not a ctest: it takes minutes.
 #include "../harness/common.hpp"
-#include "../harness/stepper.hpp"
+#include "../harness/capture.hpp"
 #include "../harness/system_io.hpp"
 #include "../problems/error.hpp"
 #include "../problems/scene.hpp"
@@ -63,21 +63,10 @@ System load(const Config& c) {
   std::vector<std::string> sets{"resolution=160"};
   sets.insert(sets.end(), c.sets.begin(), c.sets.end());
   s.p = xb::resolve_params(c.scene, sets);
-  s.p.frames = std::max(s.p.frames, c.frame + 1);
-  bool captured = false;
-  xb::RunOptions opt;
-  opt.on_system = [&](int f, int sub, int it, const xb::SparseMatrix& A, const xb::Vector& b) {
-    if (f != c.frame || sub != 0 || it != c.iteration) return false;
-    s.A = A;
-    s.A.makeCompressed();
-    s.b = b;
-    captured = true;
-    return true;
-  };
   std::cerr << "xb_bench: capturing " << c.scene << " frame " << c.frame << ", iteration " << c.iteration << " ...\n";
-  xb::run_simulation(xb::build_problem(s.p), s.p, "cholmod", opt);
-  if (!captured) throw xb::Error("xb_bench: the run ended before frame " + std::to_string(c.frame) + ", iteration " +
-                                 std::to_string(c.iteration));
+  xb::CapturedSystem cs = xb::capture_system(s.p, "cholmod", c.frame, 0, c.iteration);
+  s.A = std::move(cs.A);
+  s.b = std::move(cs.b);
   s.label = c.scene;
   return s;
 }

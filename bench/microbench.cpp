@@ -58,7 +58,7 @@ struct Case {
   Eigen::Matrix3Xd x_pred;
   Eigen::VectorXd alpha_tilde;
   xb::ConstraintState state;
-  xb::perf::CapturedSystem sys;  // the first system of frame 1 (after a frame of cholmod steps)
+  xb::perf::LabelledSystem sys;  // the first system of frame 1 (after a frame of cholmod steps)
 };
 
 Case& get_case(const SceneCase& c) {
@@ -76,7 +76,7 @@ Case& get_case(const SceneCase& c) {
       if (P.w[i] > 0) k->x_pred.col(i) += h * (P.v.col(i) + h * k->prob->gravity);  // the stepper's prediction
     k->alpha_tilde = xb::scaled_compliance(*k->prob, h);
     xb::evaluate_constraints(*k->prob, k->x_pred, k->state);
-    k->sys = xb::perf::capture_system(c, 1, 0, {});
+    k->sys = xb::perf::capture_case(c, 1, 0, {});
     slot = std::move(k);
   }
   return *slot;

@@ -28,7 +28,7 @@ int cmd_list(const CommandArgs& argv) {
 
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
-            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}});
+            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
   const std::string out = args.require("--out");
@@ -37,7 +37,7 @@ int cmd_run(const CommandArgs& argv) {
   if (args.has("--frames")) sets.push_back("frames=" + args.get("--frames"));
   for (const auto& s : args.all("--set")) sets.push_back(s);
   const Params p = resolve_params(scene, sets);
-  const auto solvers = parse_methods(args.require("--solver"));
+  const auto runs = method_runs(parse_methods(args.require("--solver")), args.get("--form", ""));
   RunOptions opt;
   opt.time_budget = args.get_double("--time-budget", 0);
   if (opt.time_budget < 0) throw Error("run: --time-budget must be >= 0");
@@ -45,19 +45,21 @@ int cmd_run(const CommandArgs& argv) {
   const Problem prob = build_problem(p);
 
   int index = 0;
-  for (const auto& method : solvers) {
-    std::cerr << "run: " << p.scene << " with " << method << " ..." << std::flush;
+  for (const auto& [method, form, tag] : runs) {
+    Params q = p;
+    if (!form.empty()) q.form = form;
+    std::cerr << "run: " << p.scene << " with " << tag << " ..." << std::flush;
     RunOptions run_opt = opt;
     if (args.has("--write-meshes")) {  // DIR/<scene>_<solver>_NNNN.ply per frame
       const std::string dir = args.get("--write-meshes");
       run_opt.on_frame = [&, dir](int frame, const Eigen::Matrix3Xd& x) {
-        write_ply(frame_ply_path(dir, p.scene + "_" + method, frame), prob, x);
+        write_ply(frame_ply_path(dir, p.scene + "_" + tag, frame), prob, x);
       };
     }
-    const RunResult res = run_simulation(prob, p, method, run_opt);
+    const RunResult res = run_simulation(prob, q, method, run_opt);
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
     ++index;
-    append_runs(out, {make_simulation_record(run_name(index, p.scene, method), p, method, res)}, index == 1);
+    append_runs(out, {make_simulation_record(run_name(index, p.scene, tag), q, method, res)}, index == 1);
   }
   print_report(out, "table");
   return 0;

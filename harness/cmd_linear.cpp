@@ -3,6 +3,8 @@
 // their residual histories and their error against the direct (CHOLMOD) solution.
 #include "args.hpp"
 #include "commands.hpp"
+#include "capture.hpp"
+#include "primal_solve.hpp"
 #include "common.hpp"
 #include "system_io.hpp"
 
@@ -86,40 +88,17 @@ int cmd_capture(const CommandArgs& argv) {
   Params p = resolve_params(scene, args.all("--set"));
   if (substep < 0 || substep >= p.substeps)
     throw Error("capture: --substep " + std::to_string(substep) + " out of range [0, " + std::to_string(p.substeps - 1) + "]");
-  // The run only has to reach the requested frame.
-  if (p.frames < frame + 1) p.frames = frame + 1;
   if (iteration >= p.max_iterations)
     throw Error("capture: --iteration " + std::to_string(iteration) + " is never assembled: the stepper stops at max_iterations = " +
                 std::to_string(p.max_iterations) + " (raise it with --set max_iterations=N)");
-  const Problem prob = build_problem(p);
-
-  bool captured = false;
-  SparseMatrix A;
-  Vector b;
-  RunOptions opt;
-  opt.on_system = [&](int f, int s, int it, const SparseMatrix& Ain, const Vector& bin) {
-    if (f != frame || s != substep || it != iteration) return false;
-    A = Ain;
-    A.makeCompressed();
-    b = bin;
-    captured = true;
-    return true;
-  };
   std::cerr << "capture: " << p.scene << " with " << solver << " to frame " << frame << ", substep " << substep
             << ", iteration " << iteration << " ..." << std::flush;
-  const RunResult res = run_simulation(prob, p, solver, opt);
-  if (!captured) {
+  CapturedSystem sys;
+  try {
+    sys = capture_system(p, solver, frame, substep, iteration);
+  } catch (const Error&) {
     std::cerr << "\n";
-    // Where the run stopped, from its log.
-    long long last_it = -1;
-    for (size_t k = 0; k < res.log.frame.size(); ++k)
-      if (res.log.frame[k] == frame && res.log.substep[k] == substep) last_it = std::max(last_it, res.log.iteration[k]);
-    std::string why = "run status " + res.status + (res.message.empty() ? "" : " (" + res.message + ")");
-    if (last_it >= 0 && (res.status == "ok" || res.status == "max_iterations"))
-      why = "that substep converged after " + std::to_string(last_it) + " outer iterations, so its last assembled system is iteration " +
-            std::to_string(last_it - 1);
-    throw Error("capture: the run ended before frame " + std::to_string(frame) + ", substep " + std::to_string(substep) +
-                ", iteration " + std::to_string(iteration) + " was reached: " + why);
+    throw;
   }
   std::cerr << " captured\n";
 
@@ -130,20 +109,21 @@ int cmd_capture(const CommandArgs& argv) {
   meta.attrs["substep"] = static_cast<long long>(substep);
   meta.attrs["iteration"] = static_cast<long long>(iteration);
   meta.attrs["capture_solver"] = solver;
-  meta.attrs["rhs_norm"] = b.norm();  // = the dual residual ‖C + α̃λ‖ at that state
-  meta.attrs["asymmetry"] = asymmetry(A);
-  write_captured_system(prefix, A, b, meta.attrs);
-  std::cout << "capture: wrote " << prefix << ".h5, " << prefix << "_A.mtx, " << prefix << "_b.mtx (" << A.rows() << " rows, "
-            << A.nonZeros() << " non-zeros)\n";
+  meta.attrs["rhs_norm"] = sys.b.norm();  // = the dual residual ‖C + α̃λ‖ at that state
+  meta.attrs["asymmetry"] = asymmetry(sys.A);
+  sys.attrs = meta.attrs;
+  std::string files;
+  for (const auto& f : write_captured_system(prefix, sys)) files += (files.empty() ? "" : ", ") + f;
+  std::cout << "capture: wrote " << files << " (" << sys.A.rows() << " rows, " << sys.A.nonZeros() << " non-zeros)\n";
   return 0;
 }
 
 int cmd_solve(const CommandArgs& argv) {
-  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}});
+  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}});
   // Everything is checked before anything is written.
   const std::string system_path = args.require("--system");
   const std::string out = args.require("--out");
-  const auto solvers = parse_methods(args.require("--solver"), true);
+  const auto runs = method_runs(parse_methods(args.require("--solver"), true), args.get("--form", ""));
   std::error_code ec;
   if (fs::exists(out) && fs::equivalent(out, system_path, ec))
     throw Error("solve: --out " + out + " is the system file itself (it would be replaced by the results)");
@@ -157,6 +137,14 @@ int cmd_solve(const CommandArgs& argv) {
   const std::string stem = fs::path(prefix).filename().string();
   const SparseMatrix& A = sys.A;
   const Vector& b = sys.b;
+  // Each run's form, resolved (and refused where impossible) before anything is written.
+  std::vector<std::string> forms;
+  for (const auto& run : runs) {
+    const std::string requested = run.form.empty() ? p.form : run.form;
+    if (requested == "primal" && !sys.has_primal())
+      throw Error("solve: " + system_path + " has no primal data (/J; captured before the primal form existed): recapture it, or use form=dual");
+    forms.push_back(sys.has_primal() ? resolve_form(requested, sys.alpha_tilde) : "dual");
+  }
   const double bnorm = norm2(b);
 
   // The reference x* = A⁻¹b: CHOLMOD plus one step of iterative refinement.
@@ -186,11 +174,14 @@ int cmd_solve(const CommandArgs& argv) {
   const double xstar_2 = xstar.size() ? norm2(xstar) : nan_value;
 
   int index = 0;
-  for (const auto& name : solvers) {
+  for (const auto& [name, requested_form, tag] : runs) {
+    const std::string& form = forms[index];
     ++index;
+    Params q = p;
+    if (!requested_form.empty()) q.form = requested_form;
     RunRecord r;
-    r.name = run_name(index, stem, name);
-    add_provenance(r, p);
+    r.name = run_name(index, stem, tag);
+    add_provenance(r, q);
     // The capture's identity (the parameters above are those of the solve).
     for (const char* k : {"frame", "substep", "iteration", "capture_solver", "asymmetry"})
       if (sys.attrs.count(k)) r.attrs[k] = sys.attrs.at(k);
@@ -198,6 +189,7 @@ int cmd_solve(const CommandArgs& argv) {
     r.attrs["level"] = std::string("linear");
     r.attrs["system"] = prefix;
     r.attrs["solver"] = name;
+    r.attrs["form_used"] = form;
     r.attrs["rows"] = static_cast<long long>(A.rows());
     r.attrs["nnz"] = static_cast<long long>(A.nonZeros());
     r.attrs["rhs_norm"] = bnorm;
@@ -210,17 +202,32 @@ int cmd_solve(const CommandArgs& argv) {
     double setup_time = nan_value, solve_time = nan_value;
     std::map<std::string, double> stats;
     std::map<std::string, std::vector<double>> arrays;
-    std::cerr << "solve: " << stem << " with " << name << " ..." << std::flush;
+    std::cerr << "solve: " << stem << " with " << tag << " ..." << std::flush;
     try {
-      auto solver = make_linear_solver(name, p);
-      Timer t;
-      solver->setup(A, SetupKind::Structure, SetupContext{});
-      setup_time = t.seconds();
-      t.reset();
-      st = solver->solve(b, x);
-      solve_time = t.seconds();
-      stats = solver->statistics();
-      arrays = solver->array_statistics();
+      if (form == "primal") {
+        // K is assembled from J inside the timed setup, as in a simulation.
+        PrimalSolve primal(make_linear_solver(name, q), sys.graph, p.linear_tol);
+        Timer t;
+        primal.setup(sys.grad, sys.alpha_tilde, sys.x, SetupKind::Structure, SetupContext{});
+        setup_time = t.seconds();
+        t.reset();
+        st = primal.solve(b, x);
+        solve_time = t.seconds();
+        stats = primal.solver().statistics();
+        arrays = primal.solver().array_statistics();
+        stats["primal_rows"] = primal.system().rows();
+        stats["primal_nonzeros"] = static_cast<double>(primal.system().K().nonZeros());
+      } else {
+        auto solver = make_linear_solver(name, q);
+        Timer t;
+        solver->setup(A, SetupKind::Structure, SetupContext{});
+        setup_time = t.seconds();
+        t.reset();
+        st = solver->solve(b, x);
+        solve_time = t.seconds();
+        stats = solver->statistics();
+        arrays = solver->array_statistics();
+      }
       status = st.status == LinearStatus::converged ? "ok" : to_string(st.status);
       message = st.message;
     } catch (const std::exception& e) {

@@ -104,6 +104,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.attrs["level"] = std::string("simulation");
   r.attrs["scene"] = p.scene;
   r.attrs["solver"] = method;
+  r.attrs["form_used"] = res.form_used;
   r.attrs["status"] = res.status;
   r.attrs["message"] = res.message;
   r.attrs["outer_iterations"] = res.outer_iterations;
@@ -156,6 +157,25 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
   r.datasets["final_positions"] = pos;
   return r;
+}
+
+std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, const std::string& form_list) {
+  std::vector<std::string> forms;
+  std::stringstream ss(form_list);
+  for (std::string f; std::getline(ss, f, ',');) {
+    if (f != "dual" && f != "primal" && f != "auto") throw Error("--form: unknown form '" + f + "' (valid: dual, primal, auto)");
+    forms.push_back(f);
+  }
+  if (forms.empty()) forms.push_back("");
+  std::vector<MethodRun> runs;
+  for (const auto& m : methods) {
+    if (find_method(m)->local) {
+      runs.push_back({m, "", m});
+      continue;
+    }
+    for (const auto& f : forms) runs.push_back({m, f, forms.size() > 1 ? m + "_" + f : m});
+  }
+  return runs;
 }
 
 std::string run_name(int index, const std::string& scene, const std::string& solver) {
@@ -229,8 +249,8 @@ void print_report(const std::string& path, const std::string& format) {
   if (format != "table") throw Error("report: unknown format '" + format + "' (valid: table, json)");
   // One table per level of run, with the columns that matter for it.
   const std::vector<std::pair<std::string, std::vector<std::string>>> layouts = {
-      {"simulation", {"scene", "solver", "status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"}},
-      {"linear", {"system", "solver", "status", "iterations", "final_relative_residual", "error_vs_direct", "setup_time", "solve_time", "levels", "operator_complexity"}},
+      {"simulation", {"scene", "solver", "form_used", "status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"}},
+      {"linear", {"system", "solver", "form_used", "status", "iterations", "final_relative_residual", "error_vs_direct", "setup_time", "solve_time", "levels", "operator_complexity"}},
   };
   for (const auto& [level, cols] : layouts) {
     std::vector<std::vector<std::string>> rows;

@@ -27,6 +27,16 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
 // "0003_cloth_hang_xpbd-gs": index within the file, then what ran.
 std::string run_name(int index, const std::string& scene, const std::string& solver);
 
+// One run of `run` or `solve`: a method and the form of its linear step.
+struct MethodRun {
+  std::string method;
+  std::string form;  // dual | primal | auto for a global method ("" = the parameters' form); "" for a local one
+  std::string tag;   // for the run's name: the method, with "_<form>" when several forms were asked for
+};
+// The runs of --solver × --form: a local method runs once, a global method once per form of
+// `form_list` (comma-separated dual | primal | auto; empty = the parameters' form only).
+std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, const std::string& form_list);
+
 // A run attribute as short text for tables ("-" if absent, numbers with 3 digits).
 std::string attr_text(const RunRecord& r, const std::string& key);
 

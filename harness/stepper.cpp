@@ -2,6 +2,7 @@
 
 #include "stability.hpp"
 
+#include "primal_solve.hpp"
 #include "reference.hpp"
 
 #include "../problems/dual_system.hpp"
@@ -68,7 +69,8 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
   const int m = prob.num_constraints();
   const double h = p.dt / p.substeps;
   const Eigen::VectorXd alpha_tilde = scaled_compliance(prob, h);
-  std::unique_ptr<LinearSolver> solver;
+  std::unique_ptr<LinearSolver> solver;  // the dual form's
+  std::optional<PrimalSolve> primal;     // or the primal form's
   std::optional<LocalMethod> local;
   std::optional<ReferenceSolver> reference;
   if (opt.reference) {
@@ -78,10 +80,17 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
   }
   Eigen::Matrix3Xd x_ref;
   double ref_scale = 0;  // ‖x_ref − x̃‖_M
-  if (info->local)
+  if (info->local) {
     local.emplace(prob, ds, p, method == "xpbd-gs");
-  else
-    solver = make_linear_solver(method, p);
+    res.form_used = "none";
+  } else {
+    res.form_used = resolve_form(p.form, alpha_tilde);
+    if (res.form_used == "primal")
+      primal.emplace(make_linear_solver(method, p), constraint_graph(prob), p.linear_tol);
+    else
+      solver = make_linear_solver(method, p);
+  }
+  LinearSolver* active = primal ? &primal->solver() : solver.get();
 
   Particles& P = prob.particles;
   StabilityMonitor stability(prob, p);  // after every substep: nan, runaway, inverted tets
@@ -193,16 +202,22 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
             last_linear = LinearStats{};
             last_action = "";
           } else {
-            ds.fill(state, alpha_tilde);
-            if (opt.on_system && opt.on_system(frame, sub, it, ds.A(), b)) {
+            if (!primal || opt.on_system) ds.fill(state, alpha_tilde);
+            if (opt.on_system && opt.on_system(SystemView{frame, sub, it, ds.A(), b, state, alpha_tilde, P.x})) {
               stop = true;
               res.message = "stopped by capture";
               break;
             }
-            solver->setup(ds.A(), first_setup ? SetupKind::Structure : SetupKind::Values, SetupContext{frame, sub, it});
+            const SetupKind kind = first_setup ? SetupKind::Structure : SetupKind::Values;
             first_setup = false;
-            last_action = solver->last_setup_action();
-            last_linear = solver->solve(b, dlambda);
+            if (primal) {
+              primal->setup(state.grad, alpha_tilde, P.x, kind, SetupContext{frame, sub, it});
+              last_linear = primal->solve(b, dlambda);
+            } else {
+              solver->setup(ds.A(), kind, SetupContext{frame, sub, it});
+              last_linear = solver->solve(b, dlambda);
+            }
+            last_action = active->last_setup_action();
             if (last_linear.status == LinearStatus::breakdown) {
               fail("breakdown", "linear solver " + method + " broke down at frame " + std::to_string(frame) +
                                     ", iteration " + std::to_string(it) + ": " + last_linear.message);
@@ -240,9 +255,9 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
                   std::to_string(res.substeps_total) + " substeps stopped at max_iterations";
   }
   res.wall_time = run_clock.seconds() - res.reference_time;
-  if (solver) {
-    res.stats = solver->statistics();
-    res.arrays = solver->array_statistics();
+  if (active) {
+    res.stats = active->statistics();
+    res.arrays = active->array_statistics();
   }
   if (local && method == "xpbd-gs") res.stats["colors"] = local->num_colors();
   if (local && method == "xpbd-jacobi") res.stats["jacobi_relaxation_used"] = local->relaxation();
@@ -258,6 +273,10 @@ RunResult run_simulation(const Problem& prob_in, const Params& p, const std::str
   }
   res.stats["rows"] = m;
   res.stats["nonzeros"] = static_cast<double>(ds.A().nonZeros());
+  if (primal) {
+    res.stats["primal_rows"] = primal->system().rows();
+    res.stats["primal_nonzeros"] = static_cast<double>(primal->system().K().nonZeros());
+  }
   res.stats["particles"] = P.size();
   res.final_positions = P.x;
   return res;

@@ -1,7 +1,8 @@
 // The stepper: Algorithm 4 of the supplemental, with any method in the inner step.
 //   per substep: v += h·g; x̃ = x + h·v; x = x̃; λ = 0
 //     repeat: C, ∇C at x → dual residual ‖C + α̃λ‖ (logged) → stop? → method step
-//             (local sweep, or A Δλ = b with b = −(C + α̃λ); λ += Δλ; x += ω M⁻¹∇CᵀΔλ)
+//             (local sweep, or A Δλ = b with b = −(C + α̃λ) in the dual or the primal form
+//             (Params::form); λ += Δλ; x += ω M⁻¹∇CᵀΔλ)
 //             → collisions (if the scene has colliders)
 //     v = (x − x_old)/h
 // A failed run is a result (its status), never a crash.
@@ -48,6 +49,7 @@ struct IterationLog {
 struct RunResult {
   std::string status = "ok";  // ok | max_iterations | diverged | nan | breakdown | timeout | error
   std::string message;
+  std::string form_used;      // dual | primal for global methods, none for local sweeps
   IterationLog log;
   long long outer_iterations = 0;   // method steps over all substeps
   double final_dual_residual = 0;   // of the last evaluation
@@ -60,14 +62,25 @@ struct RunResult {
   Eigen::Matrix3Xd final_positions;
 };
 
+// One global outer iteration's linear step, as `capture` sees it: the dual system (A is filled
+// in either form) and what the primal form is built from.
+struct SystemView {
+  int frame, substep, iteration;
+  const SparseMatrix& A;
+  const Vector& b;
+  const ConstraintState& state;
+  const Eigen::VectorXd& alpha_tilde;
+  const Eigen::Matrix3Xd& x;
+};
+
 struct RunOptions {
   double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
   // Solve every substep also by the reference method (harness/reference.hpp) and log the
   // position error per outer iteration. Its time is excluded from wall_time and time_budget.
   bool reference = false;
-  // Called with the dual system of every global outer iteration before it is solved;
-  // returning true ends the run (used by `capture`).
-  std::function<bool(int frame, int substep, int iteration, const SparseMatrix& A, const Vector& b)> on_system;
+  // Called with the system of every global outer iteration before it is solved; returning true
+  // ends the run (used by `capture`).
+  std::function<bool(const SystemView&)> on_system;
   // Called after every frame with the positions (for mesh output).
   std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
 };

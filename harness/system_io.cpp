@@ -115,8 +115,77 @@ std::string attr_text(const std::map<std::string, AttrValue>& attrs, const std::
   return std::get<std::string>(it->second);
 }
 
-void write_system_h5(const std::string& path, const SparseMatrix& A, const Vector& b,
-                     const std::map<std::string, AttrValue>& attrs) {
+SparseMatrix jacobian_csr(const ConstraintGraph& graph, const Gradients& grad) {
+  const int m = graph.num_constraints();
+  SparseMatrix J(m, 3 * graph.num_particles());
+  std::vector<Eigen::Triplet<double, int>> t;
+  t.reserve(12L * m);
+  for (int j = 0; j < m; ++j)
+    for (int s = 0; s < 4; ++s)
+      if (const int p = graph.particles[j][s]; p >= 0)
+        for (int d = 0; d < 3; ++d) t.emplace_back(j, 3 * p + d, grad[j][s][d]);
+  J.setFromTriplets(t.begin(), t.end());  // every entry stored, zeros included: the pattern is the topology
+  J.makeCompressed();
+  return J;
+}
+
+void jacobian_from_csr(const SparseMatrix& J, ConstraintGraph& graph, Gradients& grad) {
+  const int m = static_cast<int>(J.rows());
+  graph.particles.assign(m, {-1, -1, -1, -1});
+  grad.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+  for (int j = 0; j < m; ++j) {
+    int slot = -1;
+    for (SparseMatrix::InnerIterator it(J, j); it; ++it) {
+      const int p = static_cast<int>(it.col() / 3);
+      if (slot < 0 || graph.particles[j][slot] != p) {
+        if (++slot == 4) throw Error("J: row " + std::to_string(j) + " couples more than 4 particles");
+        graph.particles[j][slot] = p;
+      }
+      grad[j][slot][it.col() % 3] = it.value();
+    }
+  }
+}
+
+namespace {
+void write_csr(hid_t file, const std::string& group, const SparseMatrix& M) {
+  std::vector<long long> indptr(M.outerIndexPtr(), M.outerIndexPtr() + M.rows() + 1);
+  std::vector<long long> indices(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
+  write_array(file, (group + "/indptr").c_str(), indptr.data(), indptr.size(), H5T_NATIVE_LLONG);
+  write_array(file, (group + "/indices").c_str(), indices.data(), indices.size(), H5T_NATIVE_LLONG);
+  write_array(file, (group + "/data").c_str(), M.valuePtr(), static_cast<hsize_t>(M.nonZeros()), H5T_NATIVE_DOUBLE);
+}
+
+// A CSR matrix of `rows` × `cols` from /G/indptr, /G/indices, /G/data, every array checked.
+SparseMatrix read_csr(hid_t file, const std::string& path, const std::string& g, long long rows, long long cols) {
+  const auto indptr = read_array<long long>(file, path, (g + "/indptr").c_str(), H5T_NATIVE_LLONG);
+  const auto indices = read_array<long long>(file, path, (g + "/indices").c_str(), H5T_NATIVE_LLONG);
+  const auto data = read_array<double>(file, path, (g + "/data").c_str(), H5T_NATIVE_DOUBLE);
+  if (static_cast<long long>(indptr.size()) != rows + 1)
+    throw Error(path + ": " + g + "/indptr has " + std::to_string(indptr.size()) + " entries, expected rows + 1 = " +
+                std::to_string(rows + 1));
+  if (indices.size() != data.size() || indptr.front() != 0 || indptr.back() != static_cast<long long>(data.size()))
+    throw Error(path + ": " + g + "/indptr, " + g + "/indices and " + g + "/data are inconsistent");
+  if (rows > 2147483647LL || cols > 2147483647LL || static_cast<long long>(data.size()) > 2147483647LL)
+    throw Error(path + ": " + g + " too large for 32-bit indices");
+  SparseMatrix M(rows, cols);
+  M.resizeNonZeros(static_cast<long>(data.size()));
+  for (long long i = 0; i <= rows; ++i) M.outerIndexPtr()[i] = static_cast<int>(indptr[i]);
+  for (long long i = 0; i < rows; ++i) {
+    if (indptr[i + 1] < indptr[i]) throw Error(path + ": " + g + "/indptr is not non-decreasing at row " + std::to_string(i));
+    for (long long k = indptr[i]; k < indptr[i + 1]; ++k) {
+      if (indices[k] < 0 || indices[k] >= cols || (k > indptr[i] && indices[k] <= indices[k - 1]))
+        throw Error(path + ": " + g + "/indices out of range or unsorted in row " + std::to_string(i));
+      M.innerIndexPtr()[k] = static_cast<int>(indices[k]);
+      M.valuePtr()[k] = data[k];
+    }
+  }
+  return M;
+}
+}  // namespace
+
+void write_system_h5(const std::string& path, const CapturedSystem& sys) {
+  const SparseMatrix& A = sys.A;
+  const Vector& b = sys.b;
   if (A.rows() != A.cols() || A.rows() != b.size()) throw Error("write_system_h5: A is not square or b has the wrong size");
   if (!A.isCompressed()) throw Error("write_system_h5: A must be compressed");
   make_parent(path);
@@ -126,13 +195,16 @@ void write_system_h5(const std::string& path, const SparseMatrix& A, const Vecto
     if (file < 0) throw Error("cannot create " + tmp);
     try {
       const long long n = A.rows(), nnz = A.nonZeros();
-      std::vector<long long> indptr(A.outerIndexPtr(), A.outerIndexPtr() + n + 1);
-      std::vector<long long> indices(A.innerIndexPtr(), A.innerIndexPtr() + nnz);
-      write_array(file, "/A/indptr", indptr.data(), indptr.size(), H5T_NATIVE_LLONG);
-      write_array(file, "/A/indices", indices.data(), indices.size(), H5T_NATIVE_LLONG);
-      write_array(file, "/A/data", A.valuePtr(), static_cast<hsize_t>(nnz), H5T_NATIVE_DOUBLE);
+      write_csr(file, "/A", A);
       write_array(file, "/b", b.data(), static_cast<hsize_t>(n), H5T_NATIVE_DOUBLE);
-      for (const auto& [k, v] : attrs) write_attr(file, k, v);
+      if (sys.has_primal()) {
+        write_csr(file, "/J", jacobian_csr(sys.graph, sys.grad));
+        const auto& w = sys.graph.w;
+        write_array(file, "/inverse_mass", w.data(), static_cast<hsize_t>(w.size()), H5T_NATIVE_DOUBLE);
+        write_array(file, "/alpha_tilde", sys.alpha_tilde.data(), static_cast<hsize_t>(sys.alpha_tilde.size()), H5T_NATIVE_DOUBLE);
+        write_array(file, "/positions", sys.x.data(), static_cast<hsize_t>(sys.x.size()), H5T_NATIVE_DOUBLE);
+      }
+      for (const auto& [k, v] : sys.attrs) write_attr(file, k, v);
       write_attr(file, "kind", std::string("dual_system"));
       write_attr(file, "generator", std::string("xpbd-bench"));
       write_attr(file, "rows", n);
@@ -164,28 +236,22 @@ CapturedSystem read_system_h5(const std::string& path) {
   if (attr_text(s.attrs, "kind") != "dual_system")
     throw Error(path + ": not a captured system (attribute kind = \"dual_system\" missing; write one with `xpbd-bench capture`)");
   if (H5Lexists(file, "/A", H5P_DEFAULT) <= 0) throw Error(path + ": not a captured system (no group /A)");
-  const auto indptr = read_array<long long>(file, path, "/A/indptr", H5T_NATIVE_LLONG);
-  const auto indices = read_array<long long>(file, path, "/A/indices", H5T_NATIVE_LLONG);
-  const auto data = read_array<double>(file, path, "/A/data", H5T_NATIVE_DOUBLE);
   const auto b = read_array<double>(file, path, "/b", H5T_NATIVE_DOUBLE);
   const long long n = static_cast<long long>(b.size());
-  if (static_cast<long long>(indptr.size()) != n + 1) throw Error(path + ": /A/indptr has " + std::to_string(indptr.size()) + " entries, expected rows + 1 = " + std::to_string(n + 1));
-  if (indices.size() != data.size() || indptr.front() != 0 || indptr.back() != static_cast<long long>(data.size()))
-    throw Error(path + ": /A/indptr, /A/indices and /A/data are inconsistent");
-  if (n > 2147483647LL || static_cast<long long>(data.size()) > 2147483647LL) throw Error(path + ": system too large for 32-bit indices");
-  s.A.resize(n, n);
-  s.A.resizeNonZeros(static_cast<long>(data.size()));
-  for (long long i = 0; i <= n; ++i) s.A.outerIndexPtr()[i] = static_cast<int>(indptr[i]);
-  for (long long i = 0; i < n; ++i) {
-    if (indptr[i + 1] < indptr[i]) throw Error(path + ": /A/indptr is not non-decreasing at row " + std::to_string(i));
-    for (long long k = indptr[i]; k < indptr[i + 1]; ++k) {
-      if (indices[k] < 0 || indices[k] >= n || (k > indptr[i] && indices[k] <= indices[k - 1]))
-        throw Error(path + ": /A/indices out of range or unsorted in row " + std::to_string(i));
-      s.A.innerIndexPtr()[k] = static_cast<int>(indices[k]);
-      s.A.valuePtr()[k] = data[k];
-    }
-  }
+  s.A = read_csr(file, path, "/A", n, n);
   s.b = Eigen::Map<const Vector>(b.data(), n);
+  if (H5Lexists(file, "/J", H5P_DEFAULT) > 0) {
+    const auto w = read_array<double>(file, path, "/inverse_mass", H5T_NATIVE_DOUBLE);
+    const auto at = read_array<double>(file, path, "/alpha_tilde", H5T_NATIVE_DOUBLE);
+    const auto x = read_array<double>(file, path, "/positions", H5T_NATIVE_DOUBLE);
+    const long long np = static_cast<long long>(w.size());
+    if (static_cast<long long>(at.size()) != n) throw Error(path + ": /alpha_tilde has " + std::to_string(at.size()) + " entries, expected rows = " + std::to_string(n));
+    if (static_cast<long long>(x.size()) != 3 * np) throw Error(path + ": /positions has " + std::to_string(x.size()) + " entries, expected 3 x particles = " + std::to_string(3 * np));
+    jacobian_from_csr(read_csr(file, path, "/J", n, 3 * np), s.graph, s.grad);
+    s.graph.w = Eigen::Map<const Eigen::VectorXd>(w.data(), np);
+    s.alpha_tilde = Eigen::Map<const Eigen::VectorXd>(at.data(), n);
+    s.x = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, np);
+  }
   return s;
 }
 
@@ -196,7 +262,7 @@ void write_matrix_market(const std::string& path, const SparseMatrix& A) {
       for (SparseMatrix::InnerIterator it(A, i); it; ++it)
         if (it.col() <= i) ++lower_nnz;
     std::fprintf(f, "%%%%MatrixMarket matrix coordinate real symmetric\n");
-    std::fprintf(f, "%% xpbd-bench dual system A (lower triangle, 1-based)\n");
+    std::fprintf(f, "%% xpbd-bench symmetric system matrix (lower triangle, 1-based)\n");
     std::fprintf(f, "%lld %lld %lld\n", static_cast<long long>(A.rows()), static_cast<long long>(A.cols()), lower_nnz);
     for (int i = 0; i < A.outerSize(); ++i)
       for (SparseMatrix::InnerIterator it(A, i); it; ++it)
@@ -278,11 +344,21 @@ Vector read_matrix_market_vector(const std::string& path) {
   return b;
 }
 
-void write_captured_system(const std::string& prefix, const SparseMatrix& A, const Vector& b,
-                           const std::map<std::string, AttrValue>& attrs) {
-  write_matrix_market(prefix + "_A.mtx", A);
-  write_matrix_market(prefix + "_b.mtx", b);
-  write_system_h5(prefix + ".h5", A, b, attrs);
+std::vector<std::string> write_captured_system(const std::string& prefix, const CapturedSystem& sys) {
+  std::vector<std::string> written = {prefix + ".h5", prefix + "_A.mtx", prefix + "_b.mtx"};
+  write_matrix_market(prefix + "_A.mtx", sys.A);
+  write_matrix_market(prefix + "_b.mtx", sys.b);
+  if (sys.has_primal() && (sys.alpha_tilde.array() > 0).all()) {
+    PrimalSystem ps(sys.graph);
+    ps.fill(sys.grad, sys.alpha_tilde);
+    Vector f;
+    ps.rhs(sys.grad, sys.alpha_tilde, sys.b, f);
+    write_matrix_market(prefix + "_K.mtx", ps.K());
+    write_matrix_market(prefix + "_f.mtx", f);
+    written.insert(written.end(), {prefix + "_K.mtx", prefix + "_f.mtx"});
+  }
+  write_system_h5(prefix + ".h5", sys);
+  return written;
 }
 
 }  // namespace xb

@@ -88,10 +88,10 @@ std::pair<SparseMatrix, Vector> assembled(const std::string& scene, const std::v
   SparseMatrix A;
   Vector b;
   RunOptions opt;
-  opt.on_system = [&](int f, int s, int it, const SparseMatrix& Ain, const Vector& bin) {
-    if (f != frame || s != 0 || it != iteration) return false;
-    A = Ain;
-    b = bin;
+  opt.on_system = [&](const SystemView& v) {
+    if (v.frame != frame || v.substep != 0 || v.iteration != iteration) return false;
+    A = v.A;
+    b = v.b;
     return true;
   };
   run_simulation(build_problem(p), p, "cholmod", opt);
@@ -274,7 +274,11 @@ TEST(LinearLevel, MaxIterationsAndBreakdownAreRecordedNotCrashes) {
   A.makeCompressed();
   Vector b(3);
   b << 1, -1, 1;
-  write_captured_system(dir / "indef", A, b, {{"scene", std::string("handmade")}});
+  CapturedSystem indef;
+  indef.A = A;
+  indef.b = b;
+  indef.attrs = {{"scene", std::string("handmade")}};
+  write_captured_system(dir / "indef", indef);
   const std::string out = dir / "solve.h5";
   ASSERT_EQ(cmd_solve({"--system", dir / "indef.h5", "--solver", "cg,cholmod", "--out", out}), 0);
   auto runs = read_runs(out, false);
@@ -291,7 +295,10 @@ TEST(LinearLevel, MaxIterationsAndBreakdownAreRecordedNotCrashes) {
   S.insert(1, 1) = 0;
   S.insert(2, 2) = 1;
   S.makeCompressed();
-  write_captured_system(dir / "singular", S, b, {});
+  CapturedSystem singular;
+  singular.A = S;
+  singular.b = b;
+  write_captured_system(dir / "singular", singular);
   ASSERT_EQ(cmd_solve({"--system", dir / "singular.h5", "--solver", "cholmod,cg", "--out", out}), 0);
   runs = read_runs(out, false);
   ASSERT_EQ(runs.size(), 2u);

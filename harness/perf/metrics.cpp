@@ -100,7 +100,7 @@ void linear_metrics(const std::vector<std::string>& sets, const std::vector<std:
   const auto solvers = xb::perf::available_linear_solvers();
   for (const auto& c : linear_cases()) {
     if (!wanted(g_cases, c.label)) continue;
-    const auto sys = xb::perf::capture_system(c, capture_frame, capture_iteration, sets);
+    const auto sys = xb::perf::capture_case(c, capture_frame, capture_iteration, sets);
     const std::string base = "linear/" + sys.label;
     out.add(base + "/rows", "size", static_cast<double>(sys.A.rows()));
     out.add(base + "/nonzeros", "size", static_cast<double>(sys.A.nonZeros()));

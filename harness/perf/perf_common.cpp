@@ -4,7 +4,7 @@
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
 #include "../common.hpp"
-#include "../stepper.hpp"
+#include "../capture.hpp"
 
 namespace xb::perf {
 
@@ -14,27 +14,13 @@ Params case_params(const SceneCase& c, const std::vector<std::string>& extra_set
   return resolve_params(c.scene, sets);
 }
 
-CapturedSystem capture_system(const SceneCase& c, int frame, int iteration, const std::vector<std::string>& extra_sets,
-                              const std::string& driver) {
+LabelledSystem capture_case(const SceneCase& c, int frame, int iteration, const std::vector<std::string>& extra_sets,
+                            const std::string& driver) {
   Params p = case_params(c, extra_sets);
-  if (p.frames <= frame) p.frames = frame + 1;
-  if (p.max_iterations < iteration) p.max_iterations = iteration;
-  const Problem prob = build_problem(p);
-  CapturedSystem out;
+  if (p.max_iterations < iteration + 1) p.max_iterations = iteration + 1;
+  LabelledSystem out;
+  static_cast<CapturedSystem&>(out) = capture_system(p, driver, frame, 0, iteration);
   out.label = c.label + "/f" + std::to_string(frame) + "i" + std::to_string(iteration);
-  bool got = false;
-  RunOptions opt;
-  opt.on_system = [&](int f, int, int it, const SparseMatrix& A, const Vector& b) {
-    if (f != frame || it != iteration) return false;
-    out.A = A;
-    out.b = b;
-    got = true;
-    return true;
-  };
-  const RunResult res = run_simulation(prob, p, driver, opt);
-  if (!got)
-    throw Error("perf: could not capture " + out.label + " (the " + driver + " run ended with status " + res.status +
-                (res.message.empty() ? "" : ": " + res.message) + ")");
   return out;
 }
 

@@ -5,6 +5,7 @@
 
 #include "../../problems/params.hpp"
 #include "../../problems/sparse.hpp"
+#include "../system_io.hpp"
 
 #include <string>
 #include <vector>
@@ -18,18 +19,15 @@ struct SceneCase {
   std::vector<std::string> sets;   // key=value overrides (resolution, frames, ...)
 };
 
-// One dual system A Δλ = b captured from a scene.
-struct CapturedSystem {
+// A captured system with the label metrics and benchmarks are named by.
+struct LabelledSystem : CapturedSystem {
   std::string label;
-  SparseMatrix A;
-  Vector b;
 };
 
-// Runs `driver` (a global method, cholmod by default, so that the system does not depend on
-// the solver under test) on the scene until the system of (frame, iteration) is assembled,
-// and returns it. Throws xb::Error if the run ends before reaching it.
-CapturedSystem capture_system(const SceneCase& c, int frame, int iteration, const std::vector<std::string>& extra_sets,
-                              const std::string& driver = "cholmod");
+// xb::capture_system (harness/capture.hpp) on a case, substep 0; p.max_iterations is raised to
+// reach the iteration.
+LabelledSystem capture_case(const SceneCase& c, int frame, int iteration, const std::vector<std::string>& extra_sets,
+                            const std::string& driver = "cholmod");
 
 // Resolved parameters of a case (defaults ← scene spec ← case overrides ← extra overrides).
 Params case_params(const SceneCase& c, const std::vector<std::string>& extra_sets);
