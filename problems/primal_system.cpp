@@ -141,7 +141,9 @@ void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tild
   }
 }
 
-void PrimalSystem::apply_J(const Gradients& grad, const Vector& v, Vector& out) const {
+void PrimalSystem::apply_J(const Gradients& grad, const Vector& v, Vector& out) const { apply_J(grad, v, 1.0, false, out); }
+
+void PrimalSystem::apply_J(const Gradients& grad, const Vector& v, double sign, bool times_minv, Vector& out) const {
   const int m = graph_.num_constraints();
   out.resize(m);
 #pragma omp parallel for schedule(static)
@@ -149,9 +151,11 @@ void PrimalSystem::apply_J(const Gradients& grad, const Vector& v, Vector& out) 
     double s = 0;
     for (int a = 0; a < 4; ++a) {
       const int p = graph_.particles[j][a];
-      if (p >= 0 && block_of_[p] >= 0) s += grad[j][a].dot(v.segment<3>(3 * block_of_[p]));
+      if (p < 0 || block_of_[p] < 0) continue;
+      const double d = grad[j][a].dot(v.segment<3>(3 * block_of_[p]));
+      s += times_minv ? graph_.w[p] * d : d;
     }
-    out[j] = s;
+    out[j] = sign * s;
   }
 }
 
@@ -177,11 +181,7 @@ void PrimalSystem::recover(const Gradients& grad, const Eigen::VectorXd& alpha_t
 }
 
 void PrimalSystem::dual_residual(const Gradients& grad, const Vector& r_K, Vector& out) const {
-  Vector minv_r(r_K.size());
-  for (int p = 0; p < static_cast<int>(free_.size()); ++p)
-    minv_r.segment<3>(3 * p) = graph_.w[free_[p]] * r_K.segment<3>(3 * p);
-  apply_J(grad, minv_r, out);
-  out = -out;
+  apply_J(grad, r_K, -1.0, true, out);  // −J M⁻¹ r_K in one pass, no temporary
 }
 
 Eigen::MatrixXd PrimalSystem::rigid_modes(const Eigen::Matrix3Xd& x) const {

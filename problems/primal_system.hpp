@@ -69,6 +69,9 @@ class PrimalSystem {
   Eigen::MatrixXd rigid_modes(const Eigen::Matrix3Xd& x) const;
 
  private:
+  // out = sign · J (M⁻¹ if times_minv) v.
+  void apply_J(const Gradients& grad, const Vector& v, double sign, bool times_minv, Vector& out) const;
+
   ConstraintGraph graph_;
   std::vector<int> free_;            // dof block → particle
   std::vector<int> block_of_;        // particle → dof block, −1 if pinned
