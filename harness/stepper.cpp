@@ -54,232 +54,269 @@ void project_colliders(const Problem& prob, Eigen::Matrix3Xd& x) {
       if (prob.particles.w[p] > 0 && x(1, p) < plane.height) x(1, p) = plane.height;
 }
 
-}  // namespace
+// One run: the method, its state and the log. Algorithm 4 is run() → substep() → the outer loop;
+// what is logged per evaluation is in log_state(), the method step in step().
+class Simulation {
+ public:
+  Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt);
+  RunResult run();
 
-RunResult run_simulation(const Problem& prob_in, const Params& p, const std::string& method, const RunOptions& opt) {
-  const MethodInfo* info = find_method(method);
-  if (!info) (void)make_linear_solver(method, p);  // throws with the valid names
-  if (!info->available) throw Error("solver '" + method + "' is not available: " + info->reason);
-  if (p.threads > 0) omp_set_num_threads(p.threads);
+ private:
+  // What the previous step left for the next log entry.
+  struct LastStep {
+    LinearStats linear;
+    double time = 0;
+    std::string action;
+  };
+  void substep(int frame, int sub);
+  // Logs the state at iteration `it`; returns the dual residual.
+  double log_state(int frame, int sub, int it, const LastStep& last, double& r0);
+  // The method step from the state just evaluated; false if the run must stop.
+  bool step(int frame, int sub, int it, LastStep& last);
+  void fail(const std::string& status, const std::string& msg) {
+    res_.status = status;
+    res_.message = msg;
+    stop_ = true;
+  }
+  void finish();
 
-  RunResult res;
-  Timer run_clock;
-  Problem prob = prob_in;
-  DualSystem ds(prob);
-  const int m = prob.num_constraints();
-  const double h = p.dt / p.substeps;
-  const Eigen::VectorXd alpha_tilde = scaled_compliance(prob, h);
-  std::unique_ptr<LinearSolver> solver;  // the dual form's
-  std::optional<PrimalSolve> primal;     // or the primal form's
-  std::optional<LocalMethod> local;
-  std::optional<ReferenceSolver> reference;
+  const Params& p_;
+  const std::string& method_;
+  const RunOptions& opt_;
+  RunResult res_;
+  Timer run_clock_, sub_clock_;
+  Problem prob_;
+  DualSystem ds_;
+  double h_;
+  Eigen::VectorXd alpha_tilde_;
+  std::unique_ptr<LinearSolver> solver_;  // the dual form's
+  std::optional<PrimalSolve> primal_;     // or the primal form's
+  std::optional<LocalMethod> local_;
+  LinearSolver* active_ = nullptr;
+  std::optional<ReferenceSolver> reference_;
+  StabilityMonitor stability_;
+  Eigen::Matrix3Xd x_pred_, x_old_, dx_, work_, x_ref_;
+  double ref_scale_ = 0;  // ‖x_ref − x̃‖_M
+  double excluded_ = 0;   // s of the substep spent on the reference and the error, taken off every clock
+  Eigen::VectorXd lambda_, b_, dlambda_;
+  ConstraintState state_;
+  bool first_setup_ = true, stop_ = false, any_max_iterations_ = false;
+};
+
+Simulation::Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt)
+    : p_(p), method_(method), opt_(opt), prob_(prob), ds_(prob_), h_(p.dt / p.substeps),
+      alpha_tilde_(scaled_compliance(prob_, h_)), stability_(prob_, p) {
   if (opt.reference) {
     Timer ref_clock;
-    reference.emplace(prob, p);
-    res.reference_time += ref_clock.seconds();
+    reference_.emplace(prob_, p);
+    res_.reference_time += ref_clock.seconds();
   }
-  Eigen::Matrix3Xd x_ref;
-  double ref_scale = 0;  // ‖x_ref − x̃‖_M
-  if (info->local) {
-    local.emplace(prob, ds, p, method == "xpbd-gs");
-    res.form_used = "none";
+  if (find_method(method)->local) {
+    local_.emplace(prob_, ds_, p, method == "xpbd-gs");
+    res_.form_used = "none";
   } else {
-    res.form_used = resolve_form(p.form, alpha_tilde);
-    if (res.form_used == "primal")
-      primal.emplace(make_linear_solver(method, p), constraint_graph(prob), p.linear_tol);
+    res_.form_used = resolve_form(p.form, alpha_tilde_);
+    if (res_.form_used == "primal")
+      primal_.emplace(make_linear_solver(method, p), constraint_graph(prob_), p.linear_tol);
     else
-      solver = make_linear_solver(method, p);
+      solver_ = make_linear_solver(method, p);
+    active_ = primal_ ? &primal_->solver() : solver_.get();
   }
-  LinearSolver* active = primal ? &primal->solver() : solver.get();
+  lambda_.resize(prob_.num_constraints());
+}
 
-  Particles& P = prob.particles;
-  StabilityMonitor stability(prob, p);  // after every substep: nan, runaway, inverted tets
-  Eigen::Matrix3Xd x_pred, x_old, dx, work;
-  Eigen::VectorXd lambda(m), b(m), dlambda;
-  ConstraintState state;
-  IterationLog& L = res.log;
-  bool first_setup = true;
-  bool stop = false;
-  bool any_max_iterations = false;
-
-  auto fail = [&](const std::string& status, const std::string& msg) {
-    res.status = status;
-    res.message = msg;
-    stop = true;
-  };
-
+RunResult Simulation::run() {
   try {
-    for (int frame = 0; frame < p.frames && !stop; ++frame) {
-      for (int sub = 0; sub < p.substeps && !stop; ++sub) {
-        Timer sub_clock;
-        x_old = P.x;
-        for (int i = 0; i < P.size(); ++i)
-          if (P.w[i] > 0) P.v.col(i) += h * prob.gravity;
-        x_pred = P.x + h * P.v;
-        for (int i = 0; i < P.size(); ++i)
-          if (P.w[i] == 0) x_pred.col(i) = P.x.col(i);  // pins stay
-        P.x = x_pred;
-        lambda.setZero();
-        // Time spent on the reference and the error is taken off every clock of the run.
-        double excluded = 0;
-        if (reference) {
-          Timer ref_clock;
-          ReferenceSolution rs = reference->solve(x_pred, alpha_tilde);
-          x_ref = std::move(rs.x);
-          ref_scale = mass_norm_distance(prob, x_ref, x_pred);
-          L.reference_relative_dual_residual.push_back(rs.relative_dual_residual);
-          L.reference_iterations.push_back(rs.iterations);
-          L.reference_status.push_back(rs.status);
-          excluded += ref_clock.seconds();
-        }
-        double r0 = 0;
-        bool converged = false;
-        LinearStats last_linear;
-        double last_step_time = 0;
-        std::string last_action;
-        ++res.substeps_total;
-        for (int it = 0;; ++it) {
-          evaluate_constraints(prob, P.x, state);
-          b = -(state.C + alpha_tilde.cwiseProduct(lambda));
-          const double dual = b.norm();
-          if (it == 0) r0 = dual;
-          // Log this state.
-          L.frame.push_back(frame);
-          L.substep.push_back(sub);
-          L.iteration.push_back(it);
-          L.dual_residual.push_back(dual);
-          L.relative_dual_residual.push_back(r0 > 0 ? dual / r0 : 0);
-          L.primal_residual.push_back(primal_residual(prob, ds, state, P.x, x_pred, lambda, work));
-          L.energy.push_back(incremental_energy(prob, state, P.x, x_pred, h));
-          if (reference) {
-            Timer err_clock;
-            const double e = mass_norm_distance(prob, P.x, x_ref);
-            // A substep whose reference does not move (x_ref = x̃) has no scale: absolute error.
-            L.position_error.push_back(ref_scale > 0 ? e / ref_scale : e);
-            excluded += err_clock.seconds();
-          }
-          L.wall_time.push_back(sub_clock.seconds() - excluded);
-          L.step_time.push_back(it == 0 ? 0 : last_step_time);
-          L.linear_iterations.push_back(it == 0 ? 0 : last_linear.iterations);
-          L.linear_setup_time.push_back(it == 0 ? 0 : last_linear.setup_time);
-          L.linear_solve_time.push_back(it == 0 ? 0 : last_linear.solve_time);
-          L.linear_relative_residual.push_back(it == 0 ? 0 : last_linear.final_relative_residual);
-          L.linear_setup_action.push_back(it == 0 ? "" : last_action);
-          if (it > 0) {
-            L.linear_history_residual.insert(L.linear_history_residual.end(), last_linear.residual_history.begin(),
-                                             last_linear.residual_history.end());
-            L.linear_history_time.insert(L.linear_history_time.end(), last_linear.residual_time.begin(),
-                                         last_linear.residual_time.end());
-          }
-          L.linear_history_offset.push_back(static_cast<long long>(L.linear_history_residual.size()));
-          res.final_dual_residual = dual;
-          res.relative_dual_residual = r0 > 0 ? dual / r0 : 0;
-
-          if (!std::isfinite(dual) || !P.x.allFinite()) {
-            fail("nan", "non-finite positions or dual residual at frame " + std::to_string(frame) + ", iteration " +
-                            std::to_string(it));
-            break;
-          }
-          if (dual > divergence_factor * r0 && dual > p.atol) {
-            fail("diverged", "dual residual grew by more than 1e8 over its first value at frame " +
-                                 std::to_string(frame) + ", iteration " + std::to_string(it));
-            break;
-          }
-          if (dual <= p.rtol * r0 || dual <= p.atol) {
-            converged = true;
-            break;
-          }
-          if (it >= p.max_iterations) break;
-          if (opt.time_budget > 0 && run_clock.seconds() - res.reference_time - excluded > opt.time_budget) {
-            fail("timeout", "time budget of " + std::to_string(opt.time_budget) + " s exceeded");
-            break;
-          }
-
-          // The method step.
-          Timer step_clock;
-          if (local) {
-            local->sweep(P.x, lambda, alpha_tilde, state);
-            last_linear = LinearStats{};
-            last_action = "";
-          } else {
-            if (!primal || opt.on_system) ds.fill(state, alpha_tilde);
-            if (opt.on_system && opt.on_system(SystemView{frame, sub, it, ds.A(), b, state, alpha_tilde, P.x})) {
-              stop = true;
-              res.message = "stopped by capture";
-              break;
-            }
-            const SetupKind kind = first_setup ? SetupKind::Structure : SetupKind::Values;
-            first_setup = false;
-            if (primal) {
-              primal->setup(state.grad, alpha_tilde, P.x, kind, SetupContext{frame, sub, it});
-              last_linear = primal->solve(b, dlambda);
-            } else {
-              solver->setup(ds.A(), kind, SetupContext{frame, sub, it});
-              last_linear = solver->solve(b, dlambda);
-            }
-            last_action = active->last_setup_action();
-            if (last_linear.status == LinearStatus::breakdown) {
-              fail("breakdown", "linear solver " + method + " broke down at frame " + std::to_string(frame) +
-                                    ", iteration " + std::to_string(it) + ": " + last_linear.message);
-              break;
-            }
-            lambda += dlambda;
-            ds.apply_minv_gradT(state, dlambda, dx);
-            P.x += p.omega * dx;
-          }
-          project_colliders(prob, P.x);
-          last_step_time = step_clock.seconds();
-          ++res.outer_iterations;
-        }
-        res.reference_time += excluded;
-        if (stop) break;
-        if (converged)
-          ++res.substeps_converged;
-        else
-          any_max_iterations = true;
-        project_colliders(prob, P.x);
-        P.v = (P.x - x_old) / h;
-        if (std::string st, msg; !stability.check(P, frame, sub, st, msg)) {
-          fail(st, msg);
-          break;
-        }
-      }
-      if (!stop && opt.on_frame) opt.on_frame(frame, P.x);
+    for (int frame = 0; frame < p_.frames && !stop_; ++frame) {
+      for (int sub = 0; sub < p_.substeps && !stop_; ++sub) substep(frame, sub);
+      if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
     }
   } catch (const std::exception& e) {
     fail("error", e.what());
   }
-  if (res.status == "ok" && any_max_iterations) {
-    res.status = "max_iterations";
-    res.message = std::to_string(res.substeps_total - res.substeps_converged) + " of " +
-                  std::to_string(res.substeps_total) + " substeps stopped at max_iterations";
+  finish();
+  return std::move(res_);
+}
+
+void Simulation::substep(int frame, int sub) {
+  Particles& P = prob_.particles;
+  sub_clock_.reset();
+  x_old_ = P.x;
+  for (int i = 0; i < P.size(); ++i)
+    if (P.w[i] > 0) P.v.col(i) += h_ * prob_.gravity;
+  x_pred_ = P.x + h_ * P.v;
+  for (int i = 0; i < P.size(); ++i)
+    if (P.w[i] == 0) x_pred_.col(i) = P.x.col(i);  // pins stay
+  P.x = x_pred_;
+  lambda_.setZero();
+  excluded_ = 0;
+  if (reference_) {
+    Timer ref_clock;
+    ReferenceSolution rs = reference_->solve(x_pred_, alpha_tilde_);
+    x_ref_ = std::move(rs.x);
+    ref_scale_ = mass_norm_distance(prob_, x_ref_, x_pred_);
+    res_.log.reference_relative_dual_residual.push_back(rs.relative_dual_residual);
+    res_.log.reference_iterations.push_back(rs.iterations);
+    res_.log.reference_status.push_back(rs.status);
+    excluded_ += ref_clock.seconds();
   }
-  res.wall_time = run_clock.seconds() - res.reference_time;
-  if (active) {
-    res.stats = active->statistics();
-    res.arrays = active->array_statistics();
+  ++res_.substeps_total;
+  double r0 = 0;
+  bool converged = false;
+  LastStep last;
+  for (int it = 0;; ++it) {
+    const double dual = log_state(frame, sub, it, last, r0);
+    const std::string where = " at frame " + std::to_string(frame) + ", iteration " + std::to_string(it);
+    if (!std::isfinite(dual) || !P.x.allFinite()) {
+      fail("nan", "non-finite positions or dual residual" + where);
+      break;
+    }
+    if (dual > divergence_factor * r0 && dual > p_.atol) {
+      fail("diverged", "dual residual grew by more than 1e8 over its first value" + where);
+      break;
+    }
+    if (dual <= p_.rtol * r0 || dual <= p_.atol) {
+      converged = true;
+      break;
+    }
+    if (it >= p_.max_iterations) break;
+    if (opt_.time_budget > 0 && run_clock_.seconds() - res_.reference_time - excluded_ > opt_.time_budget) {
+      fail("timeout", "time budget of " + std::to_string(opt_.time_budget) + " s exceeded");
+      break;
+    }
+    Timer step_clock;
+    if (!step(frame, sub, it, last)) break;
+    project_colliders(prob_, P.x);
+    last.time = step_clock.seconds();
+    ++res_.outer_iterations;
   }
-  if (local && method == "xpbd-gs") res.stats["colors"] = local->num_colors();
-  if (local && method == "xpbd-jacobi") res.stats["jacobi_relaxation_used"] = local->relaxation();
+  res_.reference_time += excluded_;
+  if (stop_) return;
+  if (converged)
+    ++res_.substeps_converged;
+  else
+    any_max_iterations_ = true;
+  project_colliders(prob_, P.x);
+  P.v = (P.x - x_old_) / h_;
+  if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
+}
+
+double Simulation::log_state(int frame, int sub, int it, const LastStep& last, double& r0) {
+  const Particles& P = prob_.particles;
+  evaluate_constraints(prob_, P.x, state_);
+  b_ = -(state_.C + alpha_tilde_.cwiseProduct(lambda_));
+  const double dual = b_.norm();
+  if (it == 0) r0 = dual;
+  IterationLog& L = res_.log;
+  L.frame.push_back(frame);
+  L.substep.push_back(sub);
+  L.iteration.push_back(it);
+  L.dual_residual.push_back(dual);
+  L.relative_dual_residual.push_back(r0 > 0 ? dual / r0 : 0);
+  L.primal_residual.push_back(primal_residual(prob_, ds_, state_, P.x, x_pred_, lambda_, work_));
+  L.energy.push_back(incremental_energy(prob_, state_, P.x, x_pred_, h_));
+  if (reference_) {
+    Timer err_clock;
+    const double e = mass_norm_distance(prob_, P.x, x_ref_);
+    // A substep whose reference does not move (x_ref = x̃) has no scale: absolute error.
+    L.position_error.push_back(ref_scale_ > 0 ? e / ref_scale_ : e);
+    excluded_ += err_clock.seconds();
+  }
+  L.wall_time.push_back(sub_clock_.seconds() - excluded_);
+  // The linear_* entries describe the step that led here (none at iteration 0).
+  const LastStep none;
+  const LastStep& s = it == 0 ? none : last;
+  L.step_time.push_back(s.time);
+  L.linear_iterations.push_back(s.linear.iterations);
+  L.linear_setup_time.push_back(s.linear.setup_time);
+  L.linear_solve_time.push_back(s.linear.solve_time);
+  L.linear_relative_residual.push_back(s.linear.final_relative_residual);
+  L.linear_setup_action.push_back(s.action);
+  L.linear_history_residual.insert(L.linear_history_residual.end(), s.linear.residual_history.begin(),
+                                   s.linear.residual_history.end());
+  L.linear_history_time.insert(L.linear_history_time.end(), s.linear.residual_time.begin(), s.linear.residual_time.end());
+  L.linear_history_offset.push_back(static_cast<long long>(L.linear_history_residual.size()));
+  res_.final_dual_residual = dual;
+  res_.relative_dual_residual = r0 > 0 ? dual / r0 : 0;
+  return dual;
+}
+
+bool Simulation::step(int frame, int sub, int it, LastStep& last) {
+  Particles& P = prob_.particles;
+  if (local_) {
+    local_->sweep(P.x, lambda_, alpha_tilde_, state_);
+    last.linear = LinearStats{};
+    last.action = "";
+    return true;
+  }
+  if (!primal_ || opt_.on_system) ds_.fill(state_, alpha_tilde_);
+  if (opt_.on_system && opt_.on_system(SystemView{frame, sub, it, ds_.A(), b_, state_, alpha_tilde_, P.x})) {
+    stop_ = true;
+    res_.message = "stopped by capture";
+    return false;
+  }
+  const SetupKind kind = first_setup_ ? SetupKind::Structure : SetupKind::Values;
+  first_setup_ = false;
+  if (primal_) {
+    primal_->setup(state_.grad, alpha_tilde_, P.x, kind, SetupContext{frame, sub, it});
+    last.linear = primal_->solve(b_, dlambda_);
+  } else {
+    solver_->setup(ds_.A(), kind, SetupContext{frame, sub, it});
+    last.linear = solver_->solve(b_, dlambda_);
+  }
+  last.action = active_->last_setup_action();
+  if (last.linear.status == LinearStatus::breakdown) {
+    fail("breakdown", "linear solver " + method_ + " broke down at frame " + std::to_string(frame) + ", iteration " +
+                          std::to_string(it) + ": " + last.linear.message);
+    return false;
+  }
+  lambda_ += dlambda_;
+  ds_.apply_minv_gradT(state_, dlambda_, dx_);
+  P.x += p_.omega * dx_;
+  return true;
+}
+
+void Simulation::finish() {
+  if (res_.status == "ok" && any_max_iterations_) {
+    res_.status = "max_iterations";
+    res_.message = std::to_string(res_.substeps_total - res_.substeps_converged) + " of " +
+                   std::to_string(res_.substeps_total) + " substeps stopped at max_iterations";
+  }
+  res_.wall_time = run_clock_.seconds() - res_.reference_time;
+  if (active_) {
+    res_.stats = active_->statistics();
+    res_.arrays = active_->array_statistics();
+  }
+  if (local_ && method_ == "xpbd-gs") res_.stats["colors"] = local_->num_colors();
+  if (local_ && method_ == "xpbd-jacobi") res_.stats["jacobi_relaxation_used"] = local_->relaxation();
   // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
   // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
-  if (stability.has_tets()) res.arrays["inverted_tets"] = stability.inverted_tets();
-  if (prob.distance.size() > 0) {
+  if (stability_.has_tets()) res_.arrays["inverted_tets"] = stability_.inverted_tets();
+  if (prob_.distance.size() > 0) {
     std::vector<double> edges;
-    edges.reserve(2 * prob.distance.size());
-    for (const auto& e : prob.distance.idx) edges.insert(edges.end(), {double(e[0]), double(e[1])});
-    res.arrays["distance_edges"] = std::move(edges);
-    res.arrays["distance_rest_length"] = prob.distance.rest_length;
+    edges.reserve(2 * prob_.distance.size());
+    for (const auto& e : prob_.distance.idx) edges.insert(edges.end(), {double(e[0]), double(e[1])});
+    res_.arrays["distance_edges"] = std::move(edges);
+    res_.arrays["distance_rest_length"] = prob_.distance.rest_length;
   }
-  res.stats["rows"] = m;
-  res.stats["nonzeros"] = static_cast<double>(ds.A().nonZeros());
-  if (primal) {
-    res.stats["primal_rows"] = primal->system().rows();
-    res.stats["primal_nonzeros"] = static_cast<double>(primal->system().K().nonZeros());
+  res_.stats["rows"] = prob_.num_constraints();
+  res_.stats["nonzeros"] = static_cast<double>(ds_.A().nonZeros());
+  if (primal_) {
+    res_.stats["primal_rows"] = primal_->system().rows();
+    res_.stats["primal_nonzeros"] = static_cast<double>(primal_->system().K().nonZeros());
   }
-  res.stats["particles"] = P.size();
-  res.final_positions = P.x;
-  return res;
+  res_.stats["particles"] = prob_.particles.size();
+  res_.final_positions = prob_.particles.x;
+}
+
+}  // namespace
+
+RunResult run_simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt) {
+  const MethodInfo* info = find_method(method);
+  if (!info) (void)make_linear_solver(method, p);  // throws with the valid names
+  if (!info->available) throw Error("solver '" + method + "' is not available: " + info->reason);
+  if (p.threads > 0) omp_set_num_threads(p.threads);
+  return Simulation(prob, p, method, opt).run();
 }
 
 }  // namespace xb
