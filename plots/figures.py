@@ -29,7 +29,9 @@ sys.path.insert(0, HERE)
 import xbruns  # noqa: E402
 
 SPECS = ["squash_xpbd", "squash_mgpbd", "scaling", "near_kernel", "setup_interval", "twist_bar",
-         "cloth_stretch", "theta", "stiffness", "error_time"]
+         "cloth_stretch", "theta", "stiffness", "error_time", "dual_primal", "dual_primal_bar"]
+# --only NAME for a claim whose inputs are several specs (a sweep spec has one scene).
+GROUPS = {"dual_primal": ["dual_primal", "dual_primal_bar"]}
 
 
 # ---------------------------------------------------------------- running the sweeps
@@ -183,6 +185,7 @@ class Summary:
     def __init__(self):
         self.rows = []  # (claim, quantity, paper, measured, note)
         self.figures = []
+        self.sections = []  # (title, Markdown): a claim's own table after the main one
 
     def add(self, claim, quantity, paper, measured, note=""):
         self.rows.append((claim, quantity, paper, measured, note))
@@ -420,6 +423,11 @@ def claim_error_time(S, files, notes, out):
     plot(S, "error_time.py", files["error_time"], os.path.join(out, "error_time.png"))
 
 
+def claim_dual_primal(S, files, notes, out):
+    import dual_primal  # the claim's code lives in its own module (figures.py stays short)
+    dual_primal.claim(S, files, notes, out, GROUPS["dual_primal"])
+
+
 def plot(S, script, results, out, extra=()):
     r = subprocess.run([sys.executable, os.path.join(HERE, script), results, "-o", out] + list(extra),
                        capture_output=True, text=True)
@@ -442,6 +450,8 @@ def write_summary(S, args, notes, files, elapsed):
         f.write("| claim | quantity | paper | measured | note |\n|---|---|---|---|---|\n")
         for row in S.rows:
             f.write("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in row) + " |\n")
+        for title, text in S.sections:
+            f.write(f"\n## {title}\n\n{text}")
         f.write("\n## Figures\n\n")
         for fig in S.figures:
             f.write(f"- `{fig}` (+ PDF)\n")
@@ -472,9 +482,10 @@ def main():
     t0 = time.time()
     inventory = bench_inventory(args.bench)
     only = [s for s in args.only.split(",") if s]
-    bad = [s for s in only if s not in SPECS]
+    bad = [s for s in only if s not in SPECS and s not in GROUPS]
     if bad:
-        sys.exit(f"figures: unknown spec(s) {', '.join(bad)} (valid: {', '.join(SPECS)})")
+        sys.exit(f"figures: unknown spec(s) {', '.join(bad)} (valid: {', '.join(SPECS + list(GROUPS))})")
+    only = [x for s in only for x in GROUPS.get(s, [s])]
     notes, files = {}, {}
     for name in SPECS:
         if only and name not in only:
@@ -490,7 +501,7 @@ def main():
         files[name] = run_spec(name, args, inventory, notes)
     S = Summary()
     for fn in (claim_squash, claim_scaling, claim_near_kernel, claim_setup_interval, claim_twist, claim_cloth,
-               claim_sweeps, claim_error_time):
+               claim_sweeps, claim_error_time, claim_dual_primal):
         try:
             fn(S, files, notes, args.out)
         except Exception as ex:  # a broken claim must not hide the others
