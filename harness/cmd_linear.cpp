@@ -118,6 +118,128 @@ int cmd_capture(const CommandArgs& argv) {
   return 0;
 }
 
+namespace {
+
+// The reference x* = A⁻¹b: CHOLMOD plus one step of iterative refinement (empty x if it failed).
+struct DirectReference {
+  Vector x;
+  std::string status = "ok";
+  double relative_residual = nan_value;
+  double a_norm = nan_value, l2_norm = nan_value;
+};
+
+DirectReference direct_reference(const SparseMatrix& A, const Vector& b, const Params& p) {
+  DirectReference ref;
+  try {
+    auto direct = make_linear_solver("cholmod", p);
+    direct->setup(A, SetupKind::Structure, SetupContext{});
+    const LinearStats st = direct->solve(b, ref.x);
+    if (st.status != LinearStatus::converged) {
+      ref.status = to_string(st.status);
+      ref.x.resize(0);
+    } else {
+      Vector r, d;
+      residual(A, ref.x, b, r);
+      if (direct->solve(r, d).status == LinearStatus::converged) ref.x += d;
+      residual(A, ref.x, b, r);
+      ref.relative_residual = norm2(b) > 0 ? norm2(r) / norm2(b) : 0;
+    }
+  } catch (const std::exception& e) {
+    ref.status = std::string("error: ") + e.what();
+    ref.x.resize(0);
+  }
+  if (ref.x.size() == 0) {
+    std::cerr << "solve: no direct reference solution (cholmod: " << ref.status << "); error_vs_direct is NaN\n";
+  } else {
+    ref.a_norm = a_norm(A, ref.x);
+    ref.l2_norm = norm2(ref.x);
+  }
+  return ref;
+}
+
+// What one solver did on the system, timed by the harness.
+struct SolveOutcome {
+  std::string status = "error", message;
+  LinearStats st;
+  Vector x;
+  double setup_time = nan_value, solve_time = nan_value;
+  std::map<std::string, double> stats;
+  std::map<std::string, std::vector<double>> arrays;
+};
+
+// One solver in one form from a fresh instance. A throwing solver is an outcome, not an error.
+SolveOutcome solve_one(const CapturedSystem& sys, const std::string& name, const Params& q, const std::string& form) {
+  SolveOutcome o;
+  try {
+    Timer t;
+    if (form == "primal") {
+      // K is assembled from J inside the timed setup, as in a simulation.
+      PrimalSolve primal(make_linear_solver(name, q), sys.graph, q.linear_tol);
+      primal.setup(sys.grad, sys.alpha_tilde, sys.x, SetupKind::Structure, SetupContext{});
+      o.setup_time = t.seconds();
+      t.reset();
+      o.st = primal.solve(sys.b, o.x);
+      o.solve_time = t.seconds();
+      o.stats = primal.solver().statistics();
+      o.arrays = primal.solver().array_statistics();
+      o.stats["primal_rows"] = primal.system().rows();
+      o.stats["primal_nonzeros"] = static_cast<double>(primal.system().K().nonZeros());
+    } else {
+      auto solver = make_linear_solver(name, q);
+      solver->setup(sys.A, SetupKind::Structure, SetupContext{});
+      o.setup_time = t.seconds();
+      t.reset();
+      o.st = solver->solve(sys.b, o.x);
+      o.solve_time = t.seconds();
+      o.stats = solver->statistics();
+      o.arrays = solver->array_statistics();
+    }
+    o.status = o.st.status == LinearStatus::converged ? "ok" : to_string(o.st.status);
+    o.message = o.st.message;
+  } catch (const std::exception& e) {
+    o.status = "error";
+    o.message = e.what();
+  }
+  return o;
+}
+
+// The outcome into the run record, with the harness's own residual and errors, from x (never
+// from what the solver says).
+void record_outcome(RunRecord& r, SolveOutcome o, const DirectReference& ref, const SparseMatrix& A, const Vector& b) {
+  const double bnorm = norm2(b);
+  double rel = nan_value, err_a = nan_value, err_2 = nan_value;
+  if (o.x.size() == A.rows() && o.x.allFinite()) {
+    Vector res;
+    residual(A, o.x, b, res);
+    rel = bnorm > 0 ? norm2(res) / bnorm : norm2(res);
+    if (ref.x.size()) {
+      const Vector e = o.x - ref.x;
+      err_a = ref.a_norm > 0 ? a_norm(A, e) / ref.a_norm : nan_value;
+      err_2 = ref.l2_norm > 0 ? norm2(e) / ref.l2_norm : nan_value;
+    }
+  } else if (o.status != "error") {
+    o.message += std::string(o.message.empty() ? "" : "; ") + "solution is missing or not finite";
+  }
+  std::cerr << " " << o.status << " (" << o.st.iterations << " iterations, relative residual " << rel << ")\n";
+  r.attrs["status"] = o.status;
+  r.attrs["message"] = o.message;
+  r.attrs["iterations"] = static_cast<long long>(o.st.iterations);
+  r.attrs["final_relative_residual"] = rel;
+  r.attrs["reported_relative_residual"] = o.status == "error" ? nan_value : o.st.final_relative_residual;
+  r.attrs["setup_time"] = o.setup_time;
+  r.attrs["solve_time"] = o.solve_time;
+  r.attrs["error_vs_direct"] = err_a;
+  r.attrs["error_vs_direct_l2"] = err_2;
+  // Solver statistics; a key that collides with the harness's own gets a "solver_" prefix.
+  for (const auto& [k, v] : o.stats) r.attrs[r.attrs.count(k) ? "solver_" + k : k] = v;
+  r.datasets["residual"] = o.st.residual_history;
+  r.datasets["time"] = o.st.residual_time;
+  if (o.x.size() == A.rows()) r.datasets["solution"] = std::vector<double>(o.x.data(), o.x.data() + o.x.size());
+  for (const auto& [k, v] : o.arrays) r.datasets[r.datasets.count(k) ? "solver_" + k : k] = v;
+}
+
+}  // namespace
+
 int cmd_solve(const CommandArgs& argv) {
   Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}});
   // Everything is checked before anything is written.
@@ -135,52 +257,21 @@ int cmd_solve(const CommandArgs& argv) {
   if (p.threads > 0) omp_set_num_threads(p.threads);
   const std::string prefix = strip_h5(system_path);
   const std::string stem = fs::path(prefix).filename().string();
-  const SparseMatrix& A = sys.A;
-  const Vector& b = sys.b;
-  // Each run's form, resolved (and refused where impossible) before anything is written.
-  std::vector<std::string> forms;
+  // Each run's parameters and form, resolved (and refused where impossible) before anything is written.
+  std::vector<std::pair<Params, std::string>> setups;
   for (const auto& run : runs) {
-    const std::string requested = run.form.empty() ? p.form : run.form;
-    if (requested == "primal" && !sys.has_primal())
-      throw Error("solve: " + system_path + " has no primal data (/J; captured before the primal form existed): recapture it, or use form=dual");
-    forms.push_back(sys.has_primal() ? resolve_form(requested, sys.alpha_tilde) : "dual");
-  }
-  const double bnorm = norm2(b);
-
-  // The reference x* = A⁻¹b: CHOLMOD plus one step of iterative refinement.
-  Vector xstar;
-  std::string direct_status = "ok";
-  double direct_residual = nan_value;
-  try {
-    auto direct = make_linear_solver("cholmod", p);
-    direct->setup(A, SetupKind::Structure, SetupContext{});
-    const LinearStats st = direct->solve(b, xstar);
-    if (st.status != LinearStatus::converged) {
-      direct_status = to_string(st.status);
-      xstar.resize(0);
-    } else {
-      Vector r, d;
-      residual(A, xstar, b, r);
-      if (direct->solve(r, d).status == LinearStatus::converged) xstar += d;
-      residual(A, xstar, b, r);
-      direct_residual = bnorm > 0 ? norm2(r) / bnorm : 0;
-    }
-  } catch (const std::exception& e) {
-    direct_status = std::string("error: ") + e.what();
-    xstar.resize(0);
-  }
-  if (xstar.size() == 0) std::cerr << "solve: no direct reference solution (cholmod: " << direct_status << "); error_vs_direct is NaN\n";
-  const double xstar_a = xstar.size() ? a_norm(A, xstar) : nan_value;
-  const double xstar_2 = xstar.size() ? norm2(xstar) : nan_value;
-
-  int index = 0;
-  for (const auto& [name, requested_form, tag] : runs) {
-    const std::string& form = forms[index];
-    ++index;
     Params q = p;
-    if (!requested_form.empty()) q.form = requested_form;
+    if (!run.form.empty()) q.form = run.form;
+    if (q.form == "primal" && !sys.has_primal())
+      throw Error("solve: " + system_path + " has no primal data (/J; captured before the primal form existed): recapture it, or use form=dual");
+    setups.emplace_back(q, sys.has_primal() ? resolve_form(q.form, sys.alpha_tilde) : "dual");
+  }
+  const DirectReference ref = direct_reference(sys.A, sys.b, p);
+
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const auto& [q, form] = setups[i];
     RunRecord r;
-    r.name = run_name(index, stem, tag);
+    r.name = run_name(static_cast<int>(i + 1), stem, runs[i].tag);
     add_provenance(r, q);
     // The capture's identity (the parameters above are those of the solve).
     for (const char* k : {"frame", "substep", "iteration", "capture_solver", "asymmetry"})
@@ -188,83 +279,16 @@ int cmd_solve(const CommandArgs& argv) {
     r.attrs["scene"] = attr_text(sys.attrs, "scene");
     r.attrs["level"] = std::string("linear");
     r.attrs["system"] = prefix;
-    r.attrs["solver"] = name;
+    r.attrs["solver"] = runs[i].method;
     r.attrs["form_used"] = form;
-    r.attrs["rows"] = static_cast<long long>(A.rows());
-    r.attrs["nnz"] = static_cast<long long>(A.nonZeros());
-    r.attrs["rhs_norm"] = bnorm;
-    r.attrs["direct_status"] = direct_status;
-    r.attrs["direct_relative_residual"] = direct_residual;
-
-    std::string status = "error", message;
-    LinearStats st;
-    Vector x;
-    double setup_time = nan_value, solve_time = nan_value;
-    std::map<std::string, double> stats;
-    std::map<std::string, std::vector<double>> arrays;
-    std::cerr << "solve: " << stem << " with " << tag << " ..." << std::flush;
-    try {
-      if (form == "primal") {
-        // K is assembled from J inside the timed setup, as in a simulation.
-        PrimalSolve primal(make_linear_solver(name, q), sys.graph, p.linear_tol);
-        Timer t;
-        primal.setup(sys.grad, sys.alpha_tilde, sys.x, SetupKind::Structure, SetupContext{});
-        setup_time = t.seconds();
-        t.reset();
-        st = primal.solve(b, x);
-        solve_time = t.seconds();
-        stats = primal.solver().statistics();
-        arrays = primal.solver().array_statistics();
-        stats["primal_rows"] = primal.system().rows();
-        stats["primal_nonzeros"] = static_cast<double>(primal.system().K().nonZeros());
-      } else {
-        auto solver = make_linear_solver(name, q);
-        Timer t;
-        solver->setup(A, SetupKind::Structure, SetupContext{});
-        setup_time = t.seconds();
-        t.reset();
-        st = solver->solve(b, x);
-        solve_time = t.seconds();
-        stats = solver->statistics();
-        arrays = solver->array_statistics();
-      }
-      status = st.status == LinearStatus::converged ? "ok" : to_string(st.status);
-      message = st.message;
-    } catch (const std::exception& e) {
-      status = "error";
-      message = e.what();
-    }
-    // The harness's own residual and errors, from x (never from what the solver says).
-    double rel = nan_value, err_a = nan_value, err_2 = nan_value;
-    if (x.size() == A.rows() && x.allFinite()) {
-      Vector res;
-      residual(A, x, b, res);
-      rel = bnorm > 0 ? norm2(res) / bnorm : norm2(res);
-      if (xstar.size()) {
-        const Vector e = x - xstar;
-        err_a = xstar_a > 0 ? a_norm(A, e) / xstar_a : nan_value;
-        err_2 = xstar_2 > 0 ? norm2(e) / xstar_2 : nan_value;
-      }
-    } else if (status != "error") {
-      message += std::string(message.empty() ? "" : "; ") + "solution is missing or not finite";
-    }
-    std::cerr << " " << status << " (" << st.iterations << " iterations, relative residual " << rel << ")\n";
-    r.attrs["status"] = status;
-    r.attrs["message"] = message;
-    r.attrs["iterations"] = static_cast<long long>(st.iterations);
-    r.attrs["final_relative_residual"] = rel;
-    r.attrs["reported_relative_residual"] = status == "error" ? nan_value : st.final_relative_residual;
-    r.attrs["setup_time"] = setup_time;
-    r.attrs["solve_time"] = solve_time;
-    r.attrs["error_vs_direct"] = err_a;
-    r.attrs["error_vs_direct_l2"] = err_2;
-    // Solver statistics; a key that collides with the harness's own gets a "solver_" prefix.
-    for (const auto& [k, v] : stats) r.attrs[r.attrs.count(k) ? "solver_" + k : k] = v;
-    r.datasets["residual"] = st.residual_history;
-    r.datasets["time"] = st.residual_time;
-    if (x.size() == A.rows()) r.datasets["solution"] = std::vector<double>(x.data(), x.data() + x.size());
-    for (const auto& [k, v] : arrays) r.datasets[r.datasets.count(k) ? "solver_" + k : k] = v;
-    append_runs(out, {r}, index == 1);
+    r.attrs["rows"] = static_cast<long long>(sys.A.rows());
+    r.attrs["nnz"] = static_cast<long long>(sys.A.nonZeros());
+    r.attrs["rhs_norm"] = norm2(sys.b);
+    r.attrs["direct_status"] = ref.status;
+    r.attrs["direct_relative_residual"] = ref.relative_residual;
+    std::cerr << "solve: " << stem << " with " << runs[i].tag << " ..." << std::flush;
+    record_outcome(r, solve_one(sys, runs[i].method, q, form), ref, sys.A, sys.b);
+    append_runs(out, {r}, i == 0);
   }
   print_report(out, "table");
   return 0;
