@@ -10,8 +10,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <fstream>
 #include <iomanip>
@@ -81,6 +83,31 @@ std::string now_iso() {
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
   return buf;
 }
+
+// What the timings of this process ran under, taken once at load time (before main, so before
+// any work): the OpenMP wait policy the runtime read from the environment (libgomp reads it at
+// load time too; harness/main.cpp re-executes with `passive` when none was set) and the machine's
+// one-minute load average.
+struct ProcessStart {
+  std::string omp_wait_policy;  // lower case; "default" when unset or empty (the runtime spins, then sleeps)
+  double load_average = -1;     // < 0: /proc/loadavg unreadable
+  long long cpu_count = 0;
+};
+ProcessStart read_process_start() {
+  ProcessStart s;
+  if (const char* w = std::getenv("OMP_WAIT_POLICY")) {
+    for (const char* c = w; *c; ++c)
+      if (!std::isspace(static_cast<unsigned char>(*c))) s.omp_wait_policy += static_cast<char>(std::tolower(static_cast<unsigned char>(*c)));
+  }
+  if (s.omp_wait_policy.empty()) s.omp_wait_policy = "default";
+  if (std::FILE* f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf", &s.load_average) != 1) s.load_average = -1;
+    std::fclose(f);
+  }
+  s.cpu_count = sysconf(_SC_NPROCESSORS_ONLN);
+  return s;
+}
+const ProcessStart process_start = read_process_start();
 }  // namespace
 
 void add_provenance(RunRecord& r, const Params& p) {
@@ -93,6 +120,9 @@ void add_provenance(RunRecord& r, const Params& p) {
   r.attrs["git_sha"] = std::string(XB_GIT_SHA);
   r.attrs["machine"] = machine_description();
   r.attrs["omp_threads"] = static_cast<long long>(omp_get_max_threads());
+  r.attrs["omp_wait_policy"] = process_start.omp_wait_policy;
+  if (process_start.load_average >= 0) r.attrs["load_average"] = process_start.load_average;
+  r.attrs["cpu_count"] = process_start.cpu_count;
   r.attrs["created"] = now_iso();
 }
 
@@ -234,6 +264,44 @@ std::string attr_text(const RunRecord& r, const std::string& key) {
   return std::get<std::string>(it->second);
 }
 
+namespace {
+// A run's timings are suspect when it started on a busy machine: a one-minute load average above
+// the CPU count less this allowance means the other work alone kept (nearly) every CPU busy, so
+// the run's full-width OpenMP team shared its cores. Half a CPU of headroom, not more: the load
+// average cannot tell whose load it is (a run started within a minute of the harness's own
+// previous full-width run is flagged too), and a flagged run is a prompt to rerun, not an error.
+constexpr double load_allowance = 0.5;
+
+// Why a run's timings may be inflated ("" = nothing known against them). Each criterion needs
+// its attributes; runs recorded before they existed are judged on nothing.
+std::string timing_warning(const RunRecord& r) {
+  auto number = [&](const char* k, double& out) {
+    auto it = r.attrs.find(k);
+    if (it == r.attrs.end()) return false;
+    if (auto* d = std::get_if<double>(&it->second)) out = *d;
+    else if (auto* i = std::get_if<long long>(&it->second)) out = static_cast<double>(*i);
+    else return false;
+    return true;
+  };
+  std::string why;
+  double load = 0, cpus = 0;
+  if (number("load_average", load) && number("cpu_count", cpus) && cpus > 0 && load > cpus - load_allowance) {
+    char b[64];
+    std::snprintf(b, sizeof b, "load %.2f on %.0f CPUs", load, cpus);
+    why = b;
+  }
+  auto it = r.attrs.find("omp_wait_policy");
+  if (it != r.attrs.end()) {
+    const auto* policy = std::get_if<std::string>(&it->second);
+    if (policy && *policy != "passive") why += (why.empty() ? "" : "; ") + ("wait policy " + *policy);
+  }
+  return why;
+}
+bool has_timing_provenance(const RunRecord& r) {
+  return r.attrs.count("load_average") || r.attrs.count("omp_wait_policy");
+}
+}  // namespace
+
 void print_report(const std::string& path, const std::string& format) {
   const auto runs = read_runs(path, false);
   if (format == "json") {
@@ -241,6 +309,12 @@ void print_report(const std::string& path, const std::string& format) {
     for (size_t i = 0; i < runs.size(); ++i) {
       std::cout << (i ? ",\n " : "\n ") << "{\"run\": \"" << json_escape(runs[i].name) << "\"";
       for (const auto& [k, v] : runs[i].attrs) std::cout << ", \"" << json_escape(k) << "\": " << json_value(v);
+      // Derived, for runs that carry the timing provenance: whether the timings are suspect, and why.
+      if (has_timing_provenance(runs[i])) {
+        const std::string why = timing_warning(runs[i]);
+        std::cout << ", \"timing_suspect\": " << (why.empty() ? "false" : "true");
+        if (!why.empty()) std::cout << ", \"timing_note\": \"" << json_escape(why) << "\"";
+      }
       std::cout << "}";
     }
     std::cout << "\n]\n";
@@ -254,15 +328,23 @@ void print_report(const std::string& path, const std::string& format) {
   };
   for (const auto& [level, cols] : layouts) {
     std::vector<std::vector<std::string>> rows;
+    std::vector<std::string> warnings;
     for (const auto& r : runs)
       if (attr_text(r, "level") == level) {
         std::vector<std::string> row{r.name};
         for (const auto& c : cols) row.push_back(attr_text(r, c));
         rows.push_back(row);
+        warnings.push_back(timing_warning(r));
       }
     if (rows.empty()) continue;
     std::vector<std::string> header{"run"};
     header.insert(header.end(), cols.begin(), cols.end());
+    // A `timing` column only when some run of this table was timed under load or spinning.
+    const bool flagged = std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) { return !w.empty(); });
+    if (flagged) {
+      header.push_back("timing");
+      for (size_t i = 0; i < rows.size(); ++i) rows[i].push_back(warnings[i].empty() ? "-" : "* " + warnings[i]);
+    }
     std::vector<size_t> width(header.size());
     for (size_t c = 0; c < header.size(); ++c) {
       width[c] = header[c].size();
@@ -274,6 +356,9 @@ void print_report(const std::string& path, const std::string& format) {
     };
     line(header);
     for (const auto& row : rows) line(row);
+    if (flagged)
+      std::cout << "* timings suspect: started with the 1-min load average above CPUs - " << load_allowance
+                << ", or OpenMP threads spinning (wait policy not passive); rerun on a quiet machine\n";
     std::cout << "\n";
   }
 }
