@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -23,11 +24,12 @@ struct Result {
   std::string out, err;
 };
 
-Result sh(const std::string& args) {
+// env_prefix: e.g. "env -u OMP_WAIT_POLICY " to start the binary with a changed environment.
+Result sh(const std::string& args, const std::string& env_prefix = "") {
   const fs::path dir = fs::temp_directory_path() / ("xb_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string out = (dir / "out.txt").string(), err = (dir / "err.txt").string();
-  const int st = std::system((bench + " " + args + " >" + out + " 2>" + err).c_str());
+  const int st = std::system((env_prefix + bench + " " + args + " >" + out + " 2>" + err).c_str());
   auto slurp = [](const std::string& p) {
     std::ifstream f(p);
     std::stringstream s;
@@ -119,4 +121,97 @@ TEST(Cli, BadInputIsOneLineNonZeroAndWritesNothing) {
   EXPECT_NE(sh("run --scene cloth_hang --solver nosuch --out " + out).code, 0);
   EXPECT_EQ(fs::file_size(out), before);
   EXPECT_EQ(xb::read_runs(out).size(), 1u);
+}
+
+// However the binary is started, its OpenMP threads sleep at barriers (harness/main.cpp sets
+// OMP_WAIT_POLICY=passive and re-executes when it is unset), and every run records the policy
+// the runtime read, the load average at start and the CPU count. The recorded value is read
+// before main, so `passive` from a binary started without the variable proves the re-exec.
+TEST(Cli, RunRecordsWaitPolicyLoadAndCpusHoweverStarted) {
+  struct Case {
+    std::string env, policy;
+  };
+  for (const Case& c : {Case{"env -u OMP_WAIT_POLICY ", "passive"}, Case{"env OMP_WAIT_POLICY=active ", "active"},
+                        Case{"env OMP_WAIT_POLICY=passive ", "passive"},
+                        // A stale loop-guard marker (not this process's pid) must not stop the re-exec.
+                        Case{"env -u OMP_WAIT_POLICY XB_WAIT_POLICY_REEXEC=1 ", "passive"}}) {
+    const std::string out = tmpfile("policy.h5");
+    fs::remove(out);
+    const Result r = sh("run --scene cloth_hang --solver jacobi-pcg --set resolution=6 --out " + out, c.env);
+    ASSERT_EQ(r.code, 0) << c.env << r.err;
+    const auto runs = xb::read_runs(out);
+    ASSERT_EQ(runs.size(), 1u);
+    EXPECT_EQ(text(runs[0], "omp_wait_policy"), c.policy) << c.env;
+    EXPECT_EQ(number(runs[0], "cpu_count"), static_cast<double>(::sysconf(_SC_NPROCESSORS_ONLN))) << c.env;
+    const double load = number(runs[0], "load_average");
+    EXPECT_GE(load, 0.0) << c.env;
+    EXPECT_LT(load, 1e4) << c.env;
+  }
+  // The re-exec leaves exit code and output alone: bad input is still one line on stderr, exit 2.
+  const Result bad = sh("nosuchcommand", "env -u OMP_WAIT_POLICY ");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_EQ(bad.out, "");
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  const Result list = sh("list", "env -u OMP_WAIT_POLICY ");
+  EXPECT_EQ(list.code, 0);
+  EXPECT_NE(list.out.find("cloth_hang"), std::string::npos);
+}
+
+// `report` marks runs timed under load (load average at start above CPUs - 0.5) or with spinning
+// threads, in the table and in JSON; a normal run and a run from before these attributes are not.
+TEST(Cli, ReportFlagsRunsTimedUnderLoad) {
+  auto run = [](const std::string& name, double load, const std::string& policy) {
+    xb::RunRecord r;
+    r.name = name;
+    r.attrs["level"] = std::string("simulation");
+    r.attrs["scene"] = std::string("cloth_hang");
+    r.attrs["solver"] = std::string("cholmod");
+    r.attrs["status"] = std::string("ok");
+    r.attrs["wall_time"] = 1.25;
+    if (load >= 0) {
+      r.attrs["load_average"] = load;
+      r.attrs["cpu_count"] = 4LL;
+      r.attrs["omp_wait_policy"] = policy;
+    }
+    return r;
+  };
+  const std::string out = tmpfile("loaded.h5");
+  xb::append_runs(out,
+                  {run("0001_loaded", 3.75, "passive"), run("0002_quiet", 0.4, "passive"), run("0003_old", -1, ""),
+                   run("0004_spinning", 0.2, "active"), run("0005_edge", 3.5, "passive")},
+                  true);
+  const Result t = sh("report " + out);
+  ASSERT_EQ(t.code, 0) << t.err;
+  auto row = [&](const std::string& name) {
+    const auto at = t.out.find(name);
+    return at == std::string::npos ? std::string("(missing)") : t.out.substr(at, t.out.find('\n', at) - at);
+  };
+  EXPECT_NE(row("0001_loaded").find("* load 3.75 on 4 CPUs"), std::string::npos) << t.out;
+  EXPECT_NE(row("0004_spinning").find("* wait policy active"), std::string::npos) << t.out;
+  for (const char* ok : {"0002_quiet", "0003_old", "0005_edge"})  // 3.5 is not above 4 - 0.5
+    EXPECT_EQ(row(ok).find('*'), std::string::npos) << row(ok);
+  EXPECT_NE(t.out.find("timing"), std::string::npos) << t.out;
+  EXPECT_NE(t.out.find("\n* timings suspect"), std::string::npos) << t.out;
+
+  const Result j = sh("report " + out + " --format json");
+  ASSERT_EQ(j.code, 0) << j.err;
+  auto object = [&](const std::string& name) {
+    const auto at = j.out.find("\"" + name + "\"");
+    return at == std::string::npos ? std::string("(missing)") : j.out.substr(at, j.out.find('}', at) - at);
+  };
+  EXPECT_NE(object("0001_loaded").find("\"timing_suspect\": true"), std::string::npos) << j.out;
+  EXPECT_NE(object("0001_loaded").find("\"load_average\": 3.75"), std::string::npos) << j.out;
+  EXPECT_NE(object("0001_loaded").find("\"cpu_count\": 4"), std::string::npos) << j.out;
+  EXPECT_NE(object("0004_spinning").find("\"timing_note\": \"wait policy active\""), std::string::npos) << j.out;
+  EXPECT_NE(object("0002_quiet").find("\"timing_suspect\": false"), std::string::npos) << j.out;
+  EXPECT_NE(object("0005_edge").find("\"timing_suspect\": false"), std::string::npos) << j.out;
+  EXPECT_EQ(object("0003_old").find("timing"), std::string::npos) << j.out;
+
+  // A file with only unflagged runs: the table is as before, no column, no legend.
+  const std::string quiet = tmpfile("quiet.h5");
+  xb::append_runs(quiet, {run("0001_quiet", 0.4, "passive"), run("0002_old", -1, "")}, true);
+  const Result q = sh("report " + quiet);
+  ASSERT_EQ(q.code, 0) << q.err;
+  EXPECT_EQ(q.out.find("timing"), std::string::npos) << q.out;
+  EXPECT_EQ(q.out.find('*'), std::string::npos) << q.out;
 }
