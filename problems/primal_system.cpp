@@ -30,6 +30,11 @@ std::string resolve_form(const std::string& requested, const Eigen::VectorXd& al
 }
 
 PrimalSystem::PrimalSystem(ConstraintGraph graph) : graph_(std::move(graph)) {
+  build_incidence();
+  build_pattern();
+}
+
+void PrimalSystem::build_incidence() {
   const int n = graph_.num_particles();
   const int m = graph_.num_constraints();
   block_of_.assign(n, -1);
@@ -56,7 +61,10 @@ PrimalSystem::PrimalSystem(ConstraintGraph graph) : graph_(std::move(graph)) {
         if (p >= 0 && block_of_[p] >= 0) inc_[pos[block_of_[p]]++] = j << 2 | s;
       }
   }
+}
 
+void PrimalSystem::build_pattern() {
+  const int nb = static_cast<int>(free_.size());
   // Per node row: (column node, term) pairs of every shared constraint, sorted by column.
   std::vector<std::vector<std::pair<int, std::int64_t>>> row(nb);
 #pragma omp parallel for schedule(dynamic, 256)

@@ -69,6 +69,8 @@ class PrimalSystem {
   Eigen::MatrixXd rigid_modes(const Eigen::Matrix3Xd& x) const;
 
  private:
+  void build_incidence();  // free particles, their dof blocks, free particle → (constraint, slot)
+  void build_pattern();    // K's blocks, the terms of each, the scalar CSR pattern
   // out = sign · J (M⁻¹ if times_minv) v.
   void apply_J(const Gradients& grad, const Vector& v, double sign, bool times_minv, Vector& out) const;
 
