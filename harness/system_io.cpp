@@ -167,11 +167,16 @@ SparseMatrix read_csr(hid_t file, const std::string& path, const std::string& g,
     throw Error(path + ": " + g + "/indptr, " + g + "/indices and " + g + "/data are inconsistent");
   if (rows > 2147483647LL || cols > 2147483647LL || static_cast<long long>(data.size()) > 2147483647LL)
     throw Error(path + ": " + g + " too large for 32-bit indices");
+  // Every row's range is checked before any entry is read: a row pointer past the arrays
+  // must be reported as what it is, not as a bad index somewhere else.
+  for (long long i = 0; i < rows; ++i)
+    if (indptr[i + 1] < indptr[i] || indptr[i + 1] > static_cast<long long>(data.size()))
+      throw Error(path + ": " + g + "/indptr is not non-decreasing within [0, " + std::to_string(data.size()) +
+                  "] at row " + std::to_string(i));
   SparseMatrix M(rows, cols);
   M.resizeNonZeros(static_cast<long>(data.size()));
   for (long long i = 0; i <= rows; ++i) M.outerIndexPtr()[i] = static_cast<int>(indptr[i]);
   for (long long i = 0; i < rows; ++i) {
-    if (indptr[i + 1] < indptr[i]) throw Error(path + ": " + g + "/indptr is not non-decreasing at row " + std::to_string(i));
     for (long long k = indptr[i]; k < indptr[i + 1]; ++k) {
       if (indices[k] < 0 || indices[k] >= cols || (k > indptr[i] && indices[k] <= indices[k - 1]))
         throw Error(path + ": " + g + "/indices out of range or unsorted in row " + std::to_string(i));
