@@ -30,7 +30,6 @@ COLOURS = {"jacobi-pcg": "#1f77b4", "cg": "#17becf", "mgpbd": "#d62728", "cholmo
 # A solve whose recomputed dual residual is above this multiple of linear.tol did not reach the
 # tolerance (the solvers judge their own tracked residual, which can differ in the last digit).
 TOL_SLACK = 2.0
-FAILED = ("error", "nan", "breakdown", "diverged")
 
 
 def _num(v, default=math.nan):
@@ -63,7 +62,7 @@ def measure(run):
                    step=float(np.asarray(d["step_time"], dtype=float)[m].mean()) if "step_time" in d else math.nan,
                    unconverged=int(np.sum((rel > TOL_SLACK * tol) | ~np.isfinite(rel) | (li >= cap))))
     row["status"] = status_text(a, row)
-    row["ok"] = row["solves"] > 0 and row["unconverged"] == 0 and a.get("status") not in FAILED
+    row["ok"] = row["solves"] > 0 and row["unconverged"] == 0 and a.get("status") in ("ok", "max_iterations")
     return row
 
 
