@@ -18,10 +18,11 @@ build: setup
 	@cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 	@cmake --build $(BUILD) -j $(JOBS)
 
-# The paper's Fig. 8 scene: one-sweep XPBD stalls where the global direct solve converges.
+# The paper's Fig. 8 scene: one-sweep XPBD stalls where the global solves converge; every global
+# method in both forms of its linear step (dual A dlambda = b, primal K dx = J^T alpha~^-1 b).
 demo: build
 	@mkdir -p results plots
-	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-jacobi,xpbd-gs,jacobi-pcg,cholmod --out results/demo.h5
+	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-jacobi,xpbd-gs,jacobi-pcg,cholmod,mgpbd --form dual,primal --out results/demo.h5
 	$(PYTHON) plots/convergence.py results/demo.h5 -o plots/demo_convergence.png
 
 # The paper's claims (figures/*.toml; FIGURES_SIZE=paper for figures/paper/*.toml): sweeps into

@@ -1,57 +1,36 @@
 #!/usr/bin/env python3
-"""Dual residual against outer iteration and against wall time, one line per run, log scale.
+"""Dual residual against outer iteration and against wall time, one line per run, log scale; and
+the mean linear iterations per solve of every global run (the cost of one outer iteration).
 
 usage: python3 plots/convergence.py RESULTS.h5 [-o OUT.png] [--relative] [--frame F]
 
-Reads the schema of results/README.md: every simulation run under /runs with its datasets
-`iteration`, `frame`, `substep`, `dual_residual`, `relative_dual_residual` and `wall_time`.
-Substeps are concatenated along the iteration axis; wall time is cumulative over substeps.
-Writes OUT (PNG) and the same figure as PDF beside it.
+Reads the schema of results/README.md through plots/xbruns.py: every simulation run under /runs
+with its datasets `iteration`, `frame`, `substep`, `dual_residual`, `relative_dual_residual`,
+`wall_time` and `linear_iterations`, and its attributes `solver`, `form_used`, `status`. Substeps
+are concatenated along the iteration axis; wall time is cumulative over substeps. A global
+method run in both forms is drawn dashed (dual) and solid (primal). Writes OUT (PNG) and the same
+figure as PDF beside it.
 """
 import argparse
 import os
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import xbruns  # noqa: E402
 
-def attr(g, key, default=""):
-    v = g.attrs.get(key, default)
-    return v.decode() if isinstance(v, bytes) else v
+DATASETS = ("frame", "substep", "iteration", "dual_residual", "relative_dual_residual", "wall_time", "linear_iterations")
 
 
-def load(path, frame=None):
-    runs = []
-    with h5py.File(path, "r") as f:
-        if "runs" not in f:
-            sys.exit(f"{path}: no /runs group (not an xpbd-bench results file?)")
-        for name, g in f["runs"].items():
-            if attr(g, "level", "simulation") != "simulation" or "dual_residual" not in g:
-                continue
-            it = np.asarray(g["iteration"])
-            fr = np.asarray(g["frame"])
-            sub = np.asarray(g["substep"])
-            keep = np.ones_like(it, dtype=bool) if frame is None else fr == frame
-            # Cumulative wall time: each substep's clock restarts at 0.
-            wt = np.asarray(g["wall_time"], dtype=float)
-            starts = np.flatnonzero(it == 0)
-            cum = wt.copy()
-            offset = 0.0
-            for k, s in enumerate(starts):
-                e = starts[k + 1] if k + 1 < len(starts) else len(wt)
-                cum[s:e] = wt[s:e] + offset
-                offset = cum[e - 1]
-            runs.append(dict(
-                name=name, solver=attr(g, "solver"), scene=attr(g, "scene"), status=attr(g, "status"),
-                x=np.arange(keep.sum()), dual=np.asarray(g["dual_residual"])[keep],
-                rel=np.asarray(g["relative_dual_residual"])[keep], time=cum[keep],
-                substeps=len(np.unique(np.stack([fr, sub])[:, keep], axis=1).T) if keep.any() else 0))
-    return runs
+def run_label(run):
+    a = run["attrs"]
+    form = a.get("form_used", "")
+    return f"{a.get('solver', '?')}" + (f" {form}" if form in ("dual", "primal") else "")
 
 
 def main():
@@ -61,33 +40,48 @@ def main():
     ap.add_argument("--relative", action="store_true", help="plot the residual relative to each substep's first")
     ap.add_argument("--frame", type=int, default=None, help="only this frame")
     a = ap.parse_args()
-    if not os.path.exists(a.results):
-        sys.exit(f"{a.results}: no such file")
-    runs = load(a.results, a.frame)
+    runs = [r for r in xbruns.load(a.results, DATASETS) if "dual_residual" in r["data"]]
     if not runs:
         sys.exit(f"{a.results}: no simulation runs to plot")
-    out = a.out or os.path.splitext(a.results)[0] + "_convergence.png"
-    key = "rel" if a.relative else "dual"
+    out = a.out or xbruns.default_out(a.results, "convergence")
+    key = "relative_dual_residual" if a.relative else "dual_residual"
     ylabel = "relative dual residual" if a.relative else r"dual residual $\|C + \tilde\alpha\lambda\|_2$"
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (ax1, ax2, ax3) = plt.subplots(1, 3, figsize=(15, 4.2), gridspec_kw={"width_ratios": [1, 1, 0.8]})
+    bars = []
     for r in runs:
-        y = np.where(r[key] > 0, r[key], np.nan)
-        label = f"{r['solver']} ({r['status']})"
-        ax1.semilogy(r["x"], y, label=label, lw=1.6)
-        ax2.loglog(np.maximum(r["time"], 1e-6), y, label=label, lw=1.6)
-    scenes = sorted({r["scene"] for r in runs})
-    ax1.set_xlabel("outer iteration" + (" (substeps concatenated)" if any(r["substeps"] > 1 for r in runs) else ""))
+        d = r["data"]
+        keep = xbruns.substep_mask(r, a.frame)
+        y = np.asarray(d[key], dtype=float)[keep]
+        y = np.where(y > 0, y, np.nan)
+        label = f"{run_label(r)} ({r['attrs'].get('status', '?')})"
+        style = "--" if r["attrs"].get("form_used") == "dual" else "-"
+        ax1.semilogy(np.arange(len(y)), y, style, label=label, lw=1.6)
+        ax2.loglog(np.maximum(xbruns.cumulative_time(r)[keep], 1e-6), y, style, label=label, lw=1.6)
+        its = np.asarray(d.get("linear_iterations", []), dtype=float)[keep] if "linear_iterations" in d else []
+        solves = its[np.asarray(d["iteration"])[keep] > 0] if len(its) else []
+        if len(solves) and solves.max() > 0:
+            bars.append((run_label(r), float(np.mean(solves))))
+    substeps = any(len(np.unique(np.stack([r["data"]["frame"], r["data"]["substep"]]), axis=1).T) > 1 for r in runs)
+    ax1.set_xlabel("outer iteration" + (" (substeps concatenated)" if substeps else ""))
     ax2.set_xlabel("wall time [s]")
     for ax in (ax1, ax2):
         ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
-    ax1.legend(fontsize=9)
+    ax1.legend(fontsize=8)
+    if bars:
+        ax3.barh([b[0] for b in bars], [b[1] for b in bars], color="#5c6bc0")
+        ax3.set_xscale("log")
+        ax3.set_xlabel("mean linear iterations per solve")
+        ax3.invert_yaxis()
+        ax3.grid(True, axis="x", which="both", alpha=0.3)
+        for i, (_, v) in enumerate(bars):
+            ax3.text(v, i, f" {v:.0f}", va="center", fontsize=8)
+    else:
+        ax3.set_axis_off()
+    scenes = sorted({str(r["attrs"].get("scene", "?")) for r in runs})
     fig.suptitle(f"{', '.join(scenes)}: dual residual per outer iteration")
     fig.tight_layout()
-    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-    fig.savefig(out, dpi=130)
-    fig.savefig(os.path.splitext(out)[0] + ".pdf")
-    print(f"wrote {out} and {os.path.splitext(out)[0]}.pdf")
+    xbruns.save(fig, out)
 
 
 if __name__ == "__main__":
