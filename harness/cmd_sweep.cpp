@@ -90,12 +90,12 @@ int cmd_sweep(const CommandArgs& argv) {
     const auto runs = read_runs(out, false);
     existing = static_cast<int>(runs.size());
     for (const auto& r : runs) {
-      const std::string b = attr_text(r, "sweep_base");
+      const std::string b = attr_cell(r, "sweep_base");
       if (b == "-") continue;
       if (b != base)
         throw Error("sweep: " + out + " holds runs of another sweep (different scene or fixed parameters, run " + r.name +
                     "); write to another --out");
-      finished[attr_text(r, "sweep_key")] = r.name;
+      finished[attr_cell(r, "sweep_key")] = r.name;
     }
   }
   int todo = 0;
@@ -177,7 +177,7 @@ int cmd_sweep(const CommandArgs& argv) {
   // The summary: every run of this sweep, in sweep order, whether run now or before.
   std::map<std::string, RunRecord> by_key;
   if (std::filesystem::exists(out))
-    for (auto& r : read_runs(out, false)) by_key[attr_text(r, "sweep_key")] = std::move(r);
+    for (auto& r : read_runs(out, false)) by_key[attr_cell(r, "sweep_key")] = std::move(r);
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> header{"run"};
   for (const auto& [k, v] : spec.grid) header.push_back(k);
@@ -194,8 +194,8 @@ int cmd_sweep(const CommandArgs& argv) {
     row.push_back(j.solver);
     row.push_back(std::to_string(j.repeat));
     for (const char* c : {"status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"})
-      row.push_back(attr_text(r, c));
-    if (spec.reference) row.push_back(attr_text(r, "final_position_error"));
+      row.push_back(attr_cell(r, c));
+    if (spec.reference) row.push_back(attr_cell(r, "final_position_error"));
     rows.push_back(row);
   }
   print_table(rows);

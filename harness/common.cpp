@@ -252,7 +252,7 @@ std::string json_value(const AttrValue& v) {
 
 }  // namespace
 
-std::string attr_text(const RunRecord& r, const std::string& key) {
+std::string attr_cell(const RunRecord& r, const std::string& key) {
   auto it = r.attrs.find(key);
   if (it == r.attrs.end()) return "-";
   if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
@@ -330,9 +330,9 @@ void print_report(const std::string& path, const std::string& format) {
     std::vector<std::vector<std::string>> rows;
     std::vector<std::string> warnings;
     for (const auto& r : runs)
-      if (attr_text(r, "level") == level) {
+      if (attr_cell(r, "level") == level) {
         std::vector<std::string> row{r.name};
-        for (const auto& c : cols) row.push_back(attr_text(r, c));
+        for (const auto& c : cols) row.push_back(attr_cell(r, c));
         rows.push_back(row);
         warnings.push_back(timing_warning(r));
       }

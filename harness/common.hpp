@@ -38,7 +38,7 @@ struct MethodRun {
 std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, const std::string& form_list);
 
 // A run attribute as short text for tables ("-" if absent, numbers with 3 digits).
-std::string attr_text(const RunRecord& r, const std::string& key);
+std::string attr_cell(const RunRecord& r, const std::string& key);
 
 // Prints a report of a results file: "table" or "json".
 void print_report(const std::string& path, const std::string& format);
