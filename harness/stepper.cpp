@@ -14,6 +14,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <optional>
 
@@ -181,7 +182,9 @@ void Simulation::substep(int frame, int sub) {
     }
     if (it >= p_.max_iterations) break;
     if (opt_.time_budget > 0 && run_clock_.seconds() - res_.reference_time - excluded_ > opt_.time_budget) {
-      fail("timeout", "time budget of " + std::to_string(opt_.time_budget) + " s exceeded");
+      char budget[32];
+      std::snprintf(budget, sizeof budget, "%g", opt_.time_budget);
+      fail("timeout", std::string("time budget of ") + budget + " s exceeded");
       break;
     }
     Timer step_clock;
