@@ -69,6 +69,41 @@ SparseMatrix galerkin_product(const SparseMatrix& R, const SparseMatrix& A, cons
   return spgemm(R, spgemm(A, P));
 }
 
+void spgemm_values(const SparseMatrix& A, const SparseMatrix& B, SparseMatrix& C) {
+  if (A.cols() != B.rows() || C.rows() != A.rows() || C.cols() != B.cols())
+    throw Error("spgemm_values: the product does not fit the cached pattern");
+  const int n = static_cast<int>(A.rows()), m = static_cast<int>(B.cols());
+  const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr();
+  const int *bo = B.outerIndexPtr(), *bc = B.innerIndexPtr();
+  const int *co = C.outerIndexPtr(), *cc = C.innerIndexPtr();
+  const double *av = A.valuePtr(), *bv = B.valuePtr();
+  double* cv = C.valuePtr();
+#pragma omp parallel
+  {
+    // Dense accumulator per thread, summed in spgemm's order, then gathered by C's pattern (which
+    // holds every column the product touches, since the patterns are those of the build).
+    std::vector<double> acc(m, 0.0);
+#pragma omp for schedule(dynamic, 256)
+    for (int i = 0; i < n; ++i) {
+      for (int q = co[i]; q < co[i + 1]; ++q) acc[cc[q]] = 0;
+      for (int k = ao[i]; k < ao[i + 1]; ++k)
+        for (int t = bo[ac[k]]; t < bo[ac[k] + 1]; ++t) acc[bc[t]] += av[k] * bv[t];
+      for (int q = co[i]; q < co[i + 1]; ++q) cv[q] = acc[cc[q]];
+    }
+  }
+}
+
+void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac) {
+  AP_ = spgemm(A, P);
+  Ac = spgemm(R, AP_);
+}
+
+void GalerkinProduct::refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac) {
+  if (AP_.rows() != A.rows() || AP_.cols() != P.cols()) throw Error("Galerkin refresh before build");
+  spgemm_values(A, P, AP_);
+  spgemm_values(R, AP_, Ac);
+}
+
 void AggregateGalerkin::build(const SparseMatrix& A, const SparseMatrix& P, const SparseMatrix& R, SparseMatrix& Ac) {
   const int n = static_cast<int>(A.rows()), nc = static_cast<int>(P.cols());
   if (P.rows() != n || R.rows() != nc || R.cols() != n) throw Error("aggregate Galerkin: P, R and A do not fit");

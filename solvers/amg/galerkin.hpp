@@ -19,6 +19,22 @@ SparseMatrix spgemm(const SparseMatrix& A, const SparseMatrix& B);
 // Pᵀ A P with R = Pᵀ given (the tentative prolongator builds both).
 SparseMatrix galerkin_product(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P);
 
+// C = A·B into C's existing pattern (that of spgemm(A, B) for the same patterns): the numeric
+// pass alone, no counting and no sorting. Gives bit-identical values to spgemm.
+void spgemm_values(const SparseMatrix& A, const SparseMatrix& B, SparseMatrix& C);
+
+// The general Galerkin product with its pattern cached: build() runs R·(A·P) and keeps A·P;
+// refresh() (A's values changed, same pattern; R, P unchanged) recomputes both products' values
+// only — the lazy setup of a hierarchy whose P has several entries per row.
+class GalerkinProduct {
+ public:
+  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
+  void refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
+
+ private:
+  SparseMatrix AP_;
+};
+
 class AggregateGalerkin {
  public:
   // P: n × n_c with ≤ 1 entry per row; R = Pᵀ. Sets A_c (pattern and values) and the map.

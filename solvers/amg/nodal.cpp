@@ -1,0 +1,88 @@
+#include "nodal.hpp"
+
+#include "../../problems/error.hpp"
+#include "strength.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace xb::amg {
+
+NodeLayout NodeLayout::uniform(int rows, int block_size) {
+  if (block_size < 1 || rows % block_size != 0)
+    throw Error("block size " + std::to_string(block_size) + " does not divide the " + std::to_string(rows) + " rows");
+  NodeLayout l;
+  l.node_start.resize(rows / block_size + 1);
+  for (size_t I = 0; I < l.node_start.size(); ++I) l.node_start[I] = static_cast<int>(I) * block_size;
+  return l;
+}
+
+SparseMatrix node_matrix(const SparseMatrix& A, const NodeLayout& nodes) {
+  const int n = static_cast<int>(A.rows());
+  if (nodes.scalar() || nodes.node_start.front() != 0 || nodes.node_start.back() != n)
+    throw Error("nodal strength: the node layout does not cover the " + std::to_string(n) + " rows");
+  const int nn = nodes.num_nodes();
+  std::vector<int> node_of(n);
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nn; ++I)
+    for (int i = nodes.node_start[I]; i < nodes.node_start[I + 1]; ++i) node_of[i] = I;
+  const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr();
+  const double* av = A.valuePtr();
+  // Per node row: its node columns (sorted) and Σ a² per column, then the square roots.
+  std::vector<std::vector<int>> cols(nn);
+  std::vector<std::vector<double>> sq(nn);
+#pragma omp parallel
+  {
+    std::vector<int> pos(nn, -1);
+#pragma omp for schedule(dynamic, 256)
+    for (int I = 0; I < nn; ++I) {
+      std::vector<int>& c = cols[I];
+      for (int i = nodes.node_start[I]; i < nodes.node_start[I + 1]; ++i)
+        for (int k = ao[i]; k < ao[i + 1]; ++k)
+          if (pos[node_of[ac[k]]] < 0) {
+            pos[node_of[ac[k]]] = 0;
+            c.push_back(node_of[ac[k]]);
+          }
+      std::sort(c.begin(), c.end());
+      for (size_t q = 0; q < c.size(); ++q) pos[c[q]] = static_cast<int>(q);
+      std::vector<double>& s = sq[I];
+      s.assign(c.size(), 0.0);
+      for (int i = nodes.node_start[I]; i < nodes.node_start[I + 1]; ++i)
+        for (int k = ao[i]; k < ao[i + 1]; ++k) s[pos[node_of[ac[k]]]] += av[k] * av[k];
+      for (int J : c) pos[J] = -1;
+    }
+  }
+  SparseMatrix N(nn, nn);
+  int* no = N.outerIndexPtr();
+  no[0] = 0;
+  for (int I = 0; I < nn; ++I) no[I + 1] = no[I] + static_cast<int>(cols[I].size());
+  N.resizeNonZeros(no[nn]);
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nn; ++I)
+    for (size_t q = 0; q < cols[I].size(); ++q) {
+      N.innerIndexPtr()[no[I] + q] = cols[I][q];
+      N.valuePtr()[no[I] + q] = std::sqrt(sq[I][q]);
+    }
+  return N;
+}
+
+Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout& nodes) {
+  const int nn = nodes.num_nodes();
+  if (static_cast<int>(node_aggregates.aggregate.size()) != nn) throw Error("nodal aggregation: sizes differ");
+  Aggregates out;
+  out.num_aggregates = node_aggregates.num_aggregates;
+  out.aggregate.resize(nodes.node_start.back());
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nn; ++I)
+    for (int i = nodes.node_start[I]; i < nodes.node_start[I + 1]; ++i) out.aggregate[i] = node_aggregates.aggregate[I];
+  out.roots.reserve(node_aggregates.roots.size());
+  for (int r : node_aggregates.roots) out.roots.push_back(nodes.node_start[r]);
+  return out;
+}
+
+Aggregates nodal_aggregation(const SparseMatrix& A, const NodeLayout& nodes, double theta, AggregationRule rule) {
+  const SparseMatrix S = strength_symmetric(node_matrix(A, nodes), theta);
+  return expand_aggregates(rule(S), nodes);
+}
+
+}  // namespace xb::amg

@@ -1,0 +1,37 @@
+// Nodal coarsening of block systems (the primal form K: 3 unknowns per particle, node-major).
+// Each node's rows form a block; strength and aggregation act on the node graph and the node
+// aggregates are expanded back to the unknowns, so x, y and z of one particle always share an
+// aggregate and the per-aggregate QR sees whole rigid-body modes.
+//  Level 0: uniform blocks of ctx.block_size.
+//  Coarse levels: a node is one aggregate of the level above, its unknowns the QR columns kept
+//  there (Tentative::col_start). An aggregate where the QR dropped candidates (one particle spans
+//  only 3 of the 6 rigid modes, two particles 5) is a smaller node: block sizes may vary, so no
+//  column is padded and P keeps full column rank.
+#pragma once
+
+#include "aggregation.hpp"
+
+#include <vector>
+
+namespace xb::amg {
+
+// node_start[I] … node_start[I+1]−1 are node I's rows. Empty means "scalar" (one row per node).
+struct NodeLayout {
+  std::vector<int> node_start;
+  bool scalar() const { return node_start.empty(); }
+  int num_nodes() const { return static_cast<int>(node_start.size()) - 1; }
+  static NodeLayout uniform(int rows, int block_size);
+};
+
+// The node matrix: entry (I, J) = Frobenius norm of A's block (I, J) (stored entries only).
+// Throws xb::Error if the layout does not cover A's rows.
+SparseMatrix node_matrix(const SparseMatrix& A, const NodeLayout& nodes);
+
+// Aggregates of nodes → aggregates of rows (an isolated node's rows are isolated; roots become
+// the first row of the root node).
+Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout& nodes);
+
+// Strength (the symmetric rule on node_matrix), then `rule` on the node graph, then expansion.
+Aggregates nodal_aggregation(const SparseMatrix& A, const NodeLayout& nodes, double theta, AggregationRule rule);
+
+}  // namespace xb::amg

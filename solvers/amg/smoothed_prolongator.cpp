@@ -1,0 +1,148 @@
+#include "smoothed_prolongator.hpp"
+
+#include "../../problems/error.hpp"
+#include "block_diagonal.hpp"
+#include "galerkin.hpp"
+#include "smoothers.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace xb::amg {
+
+SparseMatrix transpose(const SparseMatrix& A) {
+  const int n = static_cast<int>(A.rows()), m = static_cast<int>(A.cols());
+  const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr();
+  const double* av = A.valuePtr();
+  SparseMatrix T(m, n);
+  T.resizeNonZeros(static_cast<int>(A.nonZeros()));
+  int* to = T.outerIndexPtr();
+  std::fill(to, to + m + 1, 0);
+  for (int k = 0; k < ao[n]; ++k) ++to[ac[k] + 1];
+  for (int j = 0; j < m; ++j) to[j + 1] += to[j];
+  std::vector<int> fill(to, to + m);
+  // Rows in increasing order: every column of T comes out sorted.
+  for (int i = 0; i < n; ++i)
+    for (int k = ao[i]; k < ao[i + 1]; ++k) {
+      const int at = fill[ac[k]]++;
+      T.innerIndexPtr()[at] = i;
+      T.valuePtr()[at] = av[k];
+    }
+  return T;
+}
+
+namespace {
+// Y = D⁻¹X with D's node blocks: rows of one node take the union of their patterns.
+SparseMatrix block_scale_rows(const BlockDiagonal& D, const SparseMatrix& X) {
+  const int nn = D.num_nodes(), m = static_cast<int>(X.cols());
+  const int *xo = X.outerIndexPtr(), *xc = X.innerIndexPtr();
+  const double* xv = X.valuePtr();
+  std::vector<std::vector<int>> cols(nn);
+  std::vector<std::vector<double>> vals(nn);  // node I: b_I rows × |cols| (row-major)
+#pragma omp parallel
+  {
+    std::vector<int> pos(m, -1);
+#pragma omp for schedule(dynamic, 256)
+    for (int I = 0; I < nn; ++I) {
+      const int s = D.node_begin(I), b = D.node_end(I) - s;
+      std::vector<int>& c = cols[I];
+      for (int r = s; r < s + b; ++r)
+        for (int k = xo[r]; k < xo[r + 1]; ++k)
+          if (pos[xc[k]] < 0) {
+            pos[xc[k]] = 0;
+            c.push_back(xc[k]);
+          }
+      std::sort(c.begin(), c.end());
+      const int nc = static_cast<int>(c.size());
+      for (int q = 0; q < nc; ++q) pos[c[q]] = q;
+      std::vector<double>& v = vals[I];
+      v.assign(static_cast<size_t>(b) * nc, 0.0);
+      for (int t = 0; t < b; ++t)  // source row s + t adds D⁻¹(r, t)·X(s + t, :) to every row r
+        for (int k = xo[s + t]; k < xo[s + t + 1]; ++k)
+          for (int r = 0; r < b; ++r) v[static_cast<size_t>(r) * nc + pos[xc[k]]] += D.inverse(I, r, t) * xv[k];
+      for (int J : c) pos[J] = -1;
+    }
+  }
+  SparseMatrix Y(X.rows(), m);
+  int* yo = Y.outerIndexPtr();
+  yo[0] = 0;
+  for (int I = 0; I < nn; ++I)
+    for (int r = D.node_begin(I); r < D.node_end(I); ++r) yo[r + 1] = yo[r] + static_cast<int>(cols[I].size());
+  Y.resizeNonZeros(yo[X.rows()]);
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nn; ++I) {
+    const int nc = static_cast<int>(cols[I].size());
+    for (int r = D.node_begin(I); r < D.node_end(I); ++r) {
+      std::copy(cols[I].begin(), cols[I].end(), Y.innerIndexPtr() + yo[r]);
+      const double* src = vals[I].data() + static_cast<size_t>(r - D.node_begin(I)) * nc;
+      std::copy(src, src + nc, Y.valuePtr() + yo[r]);
+    }
+  }
+  return Y;
+}
+
+// C = X + a·Y, patterns merged row by row (sorted columns in, sorted columns out).
+SparseMatrix add_scaled(const SparseMatrix& X, double a, const SparseMatrix& Y) {
+  const int n = static_cast<int>(X.rows());
+  const int *xo = X.outerIndexPtr(), *xc = X.innerIndexPtr(), *yo = Y.outerIndexPtr(), *yc = Y.innerIndexPtr();
+  const double *xv = X.valuePtr(), *yv = Y.valuePtr();
+  std::vector<int> rowptr(n + 1, 0);
+  auto merge = [&](int i, int* cc, double* cv) {
+    int p = xo[i], q = yo[i], cnt = 0;
+    while (p < xo[i + 1] || q < yo[i + 1]) {
+      const int end = static_cast<int>(X.cols());
+      const int cx = p < xo[i + 1] ? xc[p] : end, cy = q < yo[i + 1] ? yc[q] : end;
+      const int c = std::min(cx, cy);
+      double v = 0;
+      if (cx == c) v += xv[p++];
+      if (cy == c) v += a * yv[q++];
+      if (cc) {
+        cc[cnt] = c;
+        cv[cnt] = v;
+      }
+      ++cnt;
+    }
+    return cnt;
+  };
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) rowptr[i + 1] = merge(i, nullptr, nullptr);
+  for (int i = 0; i < n; ++i) rowptr[i + 1] += rowptr[i];
+  SparseMatrix C(n, X.cols());
+  C.resizeNonZeros(rowptr[n]);
+  std::copy(rowptr.begin(), rowptr.end(), C.outerIndexPtr());
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) merge(i, C.innerIndexPtr() + rowptr[i], C.valuePtr() + rowptr[i]);
+  return C;
+}
+}  // namespace
+
+SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
+                                       const NodeLayout& nodes, int lanczos_steps, unsigned seed,
+                                       double scalar_lambda) {
+  if (A.rows() != T.rows()) throw Error("smoothed prolongator: A and T do not fit");
+  SmoothedProlongator out;
+  Vector v;
+  SparseMatrix DinvAT;
+  if (diag == JacobiDiagonal::Block && !nodes.scalar()) {
+    BlockDiagonal D;
+    D.build(A, nodes);
+    out.lambda = estimate_lambda_max(A, D, v, lanczos_steps, seed);
+    DinvAT = block_scale_rows(D, spgemm(A, T));
+  } else {
+    const Vector inv_diag = inverse_diagonal(A);
+    out.lambda = scalar_lambda > 0 ? scalar_lambda : estimate_lambda_max(A, inv_diag, v, lanczos_steps, seed);
+    DinvAT = spgemm(A, T);
+    const int n = static_cast<int>(DinvAT.rows());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; ++i)
+      for (int k = DinvAT.outerIndexPtr()[i]; k < DinvAT.outerIndexPtr()[i + 1]; ++k) DinvAT.valuePtr()[k] *= inv_diag[i];
+  }
+  if (!(out.lambda > 0) || !std::isfinite(out.lambda))
+    throw Error("smoothed prolongator: no positive estimate of lambda_max(D^-1 A) (matrix not positive definite?)");
+  out.omega = 4.0 / (3.0 * out.lambda);
+  out.P = add_scaled(T, -out.omega, DinvAT);
+  out.R = transpose(out.P);
+  return out;
+}
+
+}  // namespace xb::amg

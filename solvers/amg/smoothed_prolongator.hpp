@@ -1,0 +1,34 @@
+// The smoothed prolongator of smoothed aggregation (Vaněk, Mandel, Brezina):
+//   P = (I − ω D⁻¹A) T,   ω = 4 / (3 λ_max(D⁻¹A)),
+// one damped-Jacobi step applied to the tentative P's columns. It lowers the energy of the coarse
+// basis functions, which is what lets aggregation reach textbook rates on elasticity-like
+// matrices (the primal form K). Since P·B_c = (I − ωD⁻¹A)B, near-kernel candidates are kept as
+// well as A keeps them. D is A's diagonal (scalar) or its node blocks (block: D⁻¹ applied per
+// node, λ_max(D⁻¹A) estimated on the symmetric L⁻¹AL⁻ᵀ with D_I = L_I L_Iᵀ).
+#pragma once
+
+#include "nodal.hpp"
+#include "tentative.hpp"
+
+namespace xb::amg {
+
+enum class JacobiDiagonal { Scalar, Block };
+
+struct SmoothedProlongator {
+  SparseMatrix P, R;   // R = Pᵀ
+  double omega = 0;    // the damping used
+  double lambda = 0;   // the λ_max(D⁻¹A) estimate
+};
+
+// A: SPD. T: the tentative prolongator. `nodes` is needed for the block diagonal (a scalar
+// layout makes Block the same as Scalar). Lanczos steps and seed as for the smoothers;
+// scalar_lambda > 0 is a known λ_max(D⁻¹A) estimate for the scalar D (the smoother's), reused.
+// Throws xb::Error if A's diagonal (blocks) is not positive definite.
+SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
+                                       const NodeLayout& nodes, int lanczos_steps, unsigned seed,
+                                       double scalar_lambda = 0);
+
+// B = Aᵀ (parallel over A's columns is not needed: a counting sort, O(nnz)).
+SparseMatrix transpose(const SparseMatrix& A);
+
+}  // namespace xb::amg
