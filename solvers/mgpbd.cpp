@@ -1,13 +1,17 @@
 // MGPBD (Algorithm 3): conjugate gradients preconditioned by one V-cycle of the in-house
-// unsmoothed-aggregation AMG (solvers/amg/), with the paper's lazy setup:
-//  - full setup (aggregates, P, every level) on SetupKind::Structure, and at the first setup
-//    call of a frame (substep 0, iteration 0) when frame % amg.setup_interval == 0, once per frame;
-//  - otherwise a values-only refresh (A_l through the precomputed Galerkin map, diagonals,
+// aggregation AMG (solvers/amg/), with the paper's lazy setup (SetupPolicy):
+//  - full setup (aggregates, P, every level) on SetupKind::Structure, on a new pattern, and at
+//    the first setup of a frame amg.setup_interval frames after the last one;
+//  - otherwise a values-only refresh (A_l through the cached Galerkin pattern, diagonals,
 //    smoother spectral bounds, the coarse factorisation).
+// On the dual system (block size 1) it is the paper's unsmoothed aggregation with B = 1; on the
+// primal form's K (block size 3, rigid-body modes given) it defaults to nodal smoothed
+// aggregation with the 6 rigid modes (amg.near_kernel = auto, amg.prolongator = auto).
 #include "amg/hierarchy.hpp"
 #include "amg/vcycle.hpp"
 #include "factories.hpp"
 #include "pcg.hpp"
+#include "setup_policy.hpp"
 #include "timer.hpp"
 
 #include "../problems/error.hpp"
@@ -22,14 +26,9 @@ class MgpbdSolver final : public LinearSolver {
       : opt_(amg::AmgOptions::from_params(p)),
         tol_(p.linear_tol),
         maxit_(p.linear_max_iterations),
-        interval_(p.amg_setup_interval) {
-    if (interval_ < 1) throw Error("amg.setup_interval must be >= 1");
+        policy_(p.amg_setup_interval) {
     // Fail on bad names now, not at the first setup inside a run.
-    amg::aggregation_rule(opt_.aggregation);
-    if (opt_.near_kernel.kind != "ones" && opt_.near_kernel.kind != "gs")
-      throw Error("amg.near_kernel: unknown kind '" + opt_.near_kernel.kind + "' (valid: ones, gs)");
-    if (opt_.smoother.kind != "jacobi" && opt_.smoother.kind != "chebyshev" && opt_.smoother.kind != "gs")
-      throw Error("amg.smoother: unknown smoother '" + opt_.smoother.kind + "' (valid: jacobi, chebyshev, gs)");
+    amg::check_option_names(opt_);
   }
   std::string name() const override { return "mgpbd"; }
 
@@ -37,15 +36,18 @@ class MgpbdSolver final : public LinearSolver {
     Timer t;
     A_ = &A;
     failure_.clear();
-    const bool frame_start = ctx.substep == 0 && ctx.iteration == 0 && ctx.frame % interval_ == 0 &&
-                             ctx.frame != last_setup_frame_;
-    const bool full = kind == SetupKind::Structure || h_.empty() || frame_start ||
-                      A.rows() != h_.matrix(0).rows() || A.nonZeros() != nnz0_;
+    // A configuration error (near_kernel = rigid on a system without rigid modes) is bad input,
+    // not a numerical failure: it propagates as xb::Error.
+    amg::resolve_options(opt_, {ctx.block_size, ctx.near_kernel});
+    const bool built = !h_.empty() && A.rows() == h_.matrix(0).rows() && A.nonZeros() == nnz0_ &&
+                       ctx.block_size == block_size_;
+    const bool full = policy_.rebuild(kind, ctx, built);
     try {
       if (full) {
-        h_.setup(A, opt_);
+        h_.setup(A, opt_, {ctx.block_size, ctx.near_kernel});
         nnz0_ = A.nonZeros();
-        last_setup_frame_ = ctx.frame;
+        block_size_ = ctx.block_size;
+        policy_.rebuilt(ctx);
         action_ = "setup";
       } else {
         h_.refresh(A);
@@ -76,10 +78,15 @@ class MgpbdSolver final : public LinearSolver {
       return st;
     }
     Preconditioner M = [this](const Vector& r, Vector& z) { h_.vcycle(r, z); };
-    st = pcg(*A_, b, x, M, tol_, maxit_);
+    st = pcg(*A_, b, x, M, tol_, maxit_, rel_);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
+  }
+
+  bool set_relative_residual(RelativeResidual rel) override {
+    rel_ = std::move(rel);
+    return true;
   }
 
   std::map<std::string, double> statistics() const override {
@@ -104,11 +111,12 @@ class MgpbdSolver final : public LinearSolver {
   amg::AmgOptions opt_;
   double tol_;
   int maxit_;
-  int interval_;
+  SetupPolicy policy_;
+  RelativeResidual rel_;
   amg::Hierarchy h_;
   const SparseMatrix* A_ = nullptr;
   long nnz0_ = -1;
-  int last_setup_frame_ = -1;
+  int block_size_ = 1;
   std::string action_, failure_;
   double setup_time_ = 0, setup_time_total_ = 0, refresh_time_total_ = 0;
   int setup_count_ = 0, refresh_count_ = 0;

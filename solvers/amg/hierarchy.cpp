@@ -4,6 +4,8 @@
 #include "../../problems/params.hpp"
 #include "strength.hpp"
 
+#include <algorithm>
+
 namespace xb::amg {
 
 AmgOptions AmgOptions::from_params(const Params& p) {
@@ -14,6 +16,7 @@ AmgOptions AmgOptions::from_params(const Params& p) {
   o.near_kernel.sweeps = p.amg_near_kernel_sweeps;
   o.near_kernel.vectors = p.amg_near_kernel_vectors;
   o.near_kernel.seed = static_cast<unsigned>(p.seed);
+  o.prolongator = p.amg_prolongator;
   o.smoother.kind = p.amg_smoother;
   o.smoother.sweeps = p.amg_smoother_sweeps;
   o.smoother.seed = static_cast<unsigned>(p.seed);
@@ -22,44 +25,90 @@ AmgOptions AmgOptions::from_params(const Params& p) {
   return o;
 }
 
-void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt) {
+void check_option_names(const AmgOptions& opt) {
+  aggregation_rule(opt.aggregation);
+  const std::string& nk = opt.near_kernel.kind;
+  if (nk != "auto" && nk != "ones" && nk != "gs" && nk != "rigid")
+    throw Error("amg.near_kernel: unknown kind '" + nk + "' (valid: auto, ones, gs, rigid)");
+  if (opt.prolongator != "auto" && opt.prolongator != "tentative" && opt.prolongator != "smoothed")
+    throw Error("amg.prolongator: unknown kind '" + opt.prolongator + "' (valid: auto, tentative, smoothed)");
+  const std::string& sm = opt.smoother.kind;
+  if (sm != "jacobi" && sm != "chebyshev" && sm != "gs")
+    throw Error("amg.smoother: unknown smoother '" + sm + "' (valid: jacobi, chebyshev, gs)");
+}
+
+AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
+  check_option_names(opt);
+  if (info.block_size < 1) throw Error("mgpbd: block size must be >= 1");
+  AmgOptions o = opt;
+  const bool block = info.block_size > 1;
+  if (o.near_kernel.kind == "auto") o.near_kernel.kind = block && info.near_kernel ? "rigid" : "ones";
+  if (o.near_kernel.kind == "rigid" && !info.near_kernel)
+    throw Error("amg.near_kernel=rigid needs the rigid-body modes of the primal form (form=primal); this system has none");
+  if (o.prolongator == "auto") o.prolongator = block ? "smoothed" : "tentative";
+  return o;
+}
+
+void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info) {
   if (A.rows() != A.cols()) throw Error("mgpbd: the matrix is not square");
   if (opt.max_levels < 1) throw Error("amg.max_levels must be >= 1");
   if (opt.max_coarse < 1) throw Error("amg.max_coarse must be >= 1");
-  const AggregationRule rule = aggregation_rule(opt.aggregation);  // validate names up front
-  opt_ = opt;
+  opt_ = resolve_options(opt, info);
+  info_ = info;
   levels_.clear();
   levels_.emplace_back();
   levels_[0].A = &A;
+  if (info.block_size > 1) levels_[0].nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info.block_size);
   Eigen::MatrixXd B;
-  for (;;) {
-    Level& L = levels_.back();
-    const SparseMatrix& Al = *L.A;
-    const int n = static_cast<int>(Al.rows());
-    if (static_cast<int>(levels_.size()) >= opt.max_levels || n <= opt.max_coarse) break;
-    if (levels_.size() == 1) B = near_kernel_candidates(Al, opt.near_kernel);
-    const SparseMatrix S = strength_symmetric(Al, opt.strength_threshold);
-    Aggregates agg = rule(S);
-    if (agg.num_aggregates == 0) break;  // every row isolated: nothing to coarsen onto
-    Tentative T = tentative_prolongator(agg, B);
-    const int nc = static_cast<int>(T.P.cols());
-    if (nc == 0 || nc >= n) break;       // no coarsening progress
-    Level next;
-    L.one_candidate = T.max_row_entries <= 1;
-    if (L.one_candidate)
-      L.galerkin.build(Al, T.P, T.R, next.A_own);
-    else
-      next.A_own = galerkin_product(T.R, Al, T.P);
-    B = T.B_coarse;
-    L.aggregates = std::move(agg);
-    L.T = std::move(T);
-    levels_.push_back(std::move(next));
-    levels_.back().A = &levels_.back().A_own;
+  while (coarsen(B)) {
   }
+  info_.near_kernel = nullptr;  // valid during setup only
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
-  for (size_t l = 0; l + 1 < levels_.size(); ++l) levels_[l].smoother = make_smoother(opt.smoother, *levels_[l].A);
   factor_coarsest();
+}
+
+bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
+  Level& L = levels_.back();
+  const SparseMatrix& Al = *L.A;
+  const int n = static_cast<int>(Al.rows());
+  if (static_cast<int>(levels_.size()) >= opt_.max_levels || n <= opt_.max_coarse) return false;
+  if (levels_.size() == 1)
+    B = near_kernel_candidates(Al, opt_.near_kernel, nullptr, info_.block_size, info_.near_kernel);
+  const AggregationRule rule = aggregation_rule(opt_.aggregation);
+  const double nodal_theta = levels_.size() > 1 && opt_.coarse_nodal_strength_threshold >= 0
+                                 ? opt_.coarse_nodal_strength_threshold
+                                 : opt_.nodal_strength_threshold;
+  Aggregates agg = L.nodes.scalar() ? rule(strength_symmetric(Al, opt_.strength_threshold))
+                                    : nodal_aggregation(Al, L.nodes, nodal_theta, rule);
+  if (agg.num_aggregates == 0) return false;  // every row isolated: nothing to coarsen onto
+  Tentative T = tentative_prolongator(agg, B);
+  const int nc = static_cast<int>(T.P.cols());
+  if (nc == 0 || nc >= n) return false;       // no coarsening progress
+  L.smoother = make_smoother(opt_.smoother, Al);
+  if (opt_.prolongator == "smoothed") {
+    // The smoother's λ_max(D⁻¹A) is the one the scalar-diagonal P needs: no second Lanczos.
+    SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,
+                                               opt_.smoother.power_iterations, opt_.smoother.seed,
+                                               L.smoother->lambda_max());
+    T.P = std::move(S.P);
+    T.R = std::move(S.R);
+    T.max_row_entries = 0;
+    for (int i = 0; i < n; ++i) T.max_row_entries = std::max(T.max_row_entries, static_cast<int>(T.P.row(i).nonZeros()));
+  }
+  Level next;
+  L.one_candidate = T.max_row_entries <= 1;
+  if (L.one_candidate)
+    L.galerkin.build(Al, T.P, T.R, next.A_own);
+  else
+    L.product.build(T.R, Al, T.P, next.A_own);
+  if (!L.nodes.scalar()) next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns
+  B = T.B_coarse;
+  L.aggregates = std::move(agg);
+  L.T = std::move(T);
+  levels_.push_back(std::move(next));
+  levels_.back().A = &levels_.back().A_own;
+  return true;
 }
 
 void Hierarchy::refresh(const SparseMatrix& A) {
@@ -73,7 +122,7 @@ void Hierarchy::refresh(const SparseMatrix& A) {
     if (L.one_candidate)
       L.galerkin.refresh(*L.A, next.A_own);
     else
-      next.A_own = galerkin_product(L.T.R, *L.A, L.T.P);
+      L.product.refresh(L.T.R, *L.A, L.T.P, next.A_own);
     L.smoother->refresh(*L.A);
   }
   factor_coarsest();

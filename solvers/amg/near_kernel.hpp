@@ -1,5 +1,8 @@
 // Near-kernel candidates B (n × k): the vectors the tentative prolongator must reproduce.
-//  ones: B = 1 (plain unsmoothed aggregation, the authors' released code).
+//  ones: B = 1 (plain unsmoothed aggregation, the authors' released code); on a block system
+//        (b unknowns per node) the b unit components per node (on K: the 3 translations).
+//  rigid: the caller's basis (the primal form's 6 rigid-body modes), copied, with `extra` gs
+//        vectors appended.
 //  gs:   the paper's: `sweeps` multicolour Gauss–Seidel sweeps on A x = 0 from a random start
 //        (seeded, so a setup is reproducible), `vectors` of them; each column scaled to unit norm.
 #pragma once
@@ -13,15 +16,23 @@
 namespace xb::amg {
 
 struct NearKernelOptions {
-  std::string kind = "ones";  // ones | gs
+  std::string kind = "ones";  // ones | gs | rigid (auto is resolved by the hierarchy)
   int sweeps = 20;
   int vectors = 1;
+  int extra = 0;  // rigid: this many relaxed random vectors appended to the caller's basis
   unsigned seed = 1;
 };
 
 // `coloring` (of A's pattern) may be passed to reuse one; otherwise one is computed for gs.
-// Throws xb::Error naming amg.near_kernel for an unknown kind.
+// `given`: the caller's near-kernel basis (rigid needs it). Throws xb::Error naming
+// amg.near_kernel for an unknown kind, for rigid without `given` or with the wrong row count.
 Eigen::MatrixXd near_kernel_candidates(const SparseMatrix& A, const NearKernelOptions& opt,
+                                       const Coloring* coloring = nullptr, int block_size = 1,
+                                       const Eigen::MatrixXd* given = nullptr);
+
+// `count` vectors, each `sweeps` forward multicolour Gauss–Seidel sweeps on A x = 0 from a seeded
+// random start, scaled to unit norm (the gs candidates).
+Eigen::MatrixXd relaxed_random_vectors(const SparseMatrix& A, int count, int sweeps, unsigned seed,
                                        const Coloring* coloring = nullptr);
 
 }  // namespace xb::amg
