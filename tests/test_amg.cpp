@@ -413,7 +413,7 @@ TEST(AmgBadInput, ClearErrors) {
   p.amg_smoother = "sor";
   EXPECT_THROW(make_linear_solver("mgpbd", p), Error);
   p = Params();
-  p.amg_near_kernel = "rigid";
+  p.amg_near_kernel = "constant";
   EXPECT_THROW(make_linear_solver("mgpbd", p), Error);
   // Solve before setup is a breakdown, not a crash.
   auto s = make_linear_solver("mgpbd", Params());

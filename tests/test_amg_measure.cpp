@@ -1,0 +1,125 @@
+// Not a test: the measurements behind the primal-form AMG report. For each system (a scene state
+// built by test_amg_primal.hpp) it solves the dual A Δλ = b with Jacobi-PCG and the primal K with
+// Jacobi-PCG and with mgpbd's hierarchy in each variant, all to dual relative residual 1e-8.
+// Run: test_amg --gtest_also_run_disabled_tests --gtest_filter=AmgPrimalMeasure.*
+//   XB_AMG_SYSTEMS  "scene/key=value/...;..."  (frames=N, iterations=N are the state, others Params keys)
+//   XB_AMG_VARIANTS "key=value,...;..." keys: theta smoother sweeps prol diag nk nkv max_coarse
+#include "solvers/amg/hierarchy.hpp"
+#include "solvers/kernels.hpp"
+#include "solvers/pcg.hpp"
+#include "solvers/timer.hpp"
+#include "test_amg_primal.hpp"
+
+#include <gtest/gtest.h>
+#include <unsupported/Eigen/SparseExtra>
+
+#include <cstdio>
+#include <sstream>
+
+using namespace xb;
+
+namespace {
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, sep);)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+amg::AmgOptions variant_options(const std::string& spec) {
+  amg::AmgOptions o = amg::AmgOptions::from_params(Params());
+  for (const std::string& kv : split(spec, ',')) {
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos) continue;  // "default"
+    const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
+    if (k == "theta") o.nodal_strength_threshold = std::stod(v);
+    else if (k == "smoother") o.smoother.kind = v;
+    else if (k == "sweeps") o.smoother.sweeps = std::stoi(v);
+    else if (k == "prol") o.prolongator = v;
+    else if (k == "diag") o.prolongator_diagonal = v == "block" ? amg::JacobiDiagonal::Block : amg::JacobiDiagonal::Scalar;
+    else if (k == "nk") o.near_kernel.kind = v;
+    else if (k == "nkv") o.near_kernel.vectors = std::stoi(v);
+    else if (k == "extra") o.near_kernel.extra = std::stoi(v);
+    else if (k == "ctheta") o.coarse_nodal_strength_threshold = std::stod(v);
+    else if (k == "nks") o.near_kernel.sweeps = std::stoi(v);
+    else if (k == "max_coarse") o.max_coarse = std::stoi(v);
+    else ADD_FAILURE() << "unknown variant key " << k;
+  }
+  return o;
+}
+
+void measure_variant(const test::PrimalCase& c, const std::string& spec) {
+  const amg::AmgOptions o = variant_options(spec);
+  amg::Hierarchy h;
+  Timer ts;
+  h.setup(c.K, o, {3, &c.rigid});
+  const double setup = ts.seconds();
+  Timer tr;
+  h.refresh(c.K);
+  const double refresh = tr.seconds();
+  Vector x;
+  Preconditioner M = [&](const Vector& r, Vector& z) { h.vcycle(r, z); };
+  const LinearStats st = pcg(c.K, c.f, x, M, 1e-8, 5000, c.dual_measure());
+  Vector r;
+  residual(c.A(), c.recover(x), c.b, r);
+  std::printf("  mgpbd K [%s]: %s levels %d oc %.2f gc %.2f its %d (dual rel %.1e) setup %.3f refresh %.3f solve %.3f s rows:",
+              spec.c_str(), st.message.empty() ? to_string(st.status) : st.message.c_str(), h.num_levels(), h.operator_complexity(), h.grid_complexity(), st.iterations,
+              r.norm() / c.b.norm(), setup, refresh, st.solve_time);
+  for (double v : h.level_rows()) std::printf(" %g", v);
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+void measure_system(const std::string& spec, const std::vector<std::string>& variants) {
+  const std::vector<std::string> parts = split(spec, '/');
+  std::vector<std::pair<std::string, std::string>> overrides;
+  int frames = 0, iterations = 0;
+  for (size_t i = 1; i < parts.size(); ++i) {
+    const size_t eq = parts[i].find('=');
+    const std::string k = parts[i].substr(0, eq), v = parts[i].substr(eq + 1);
+    if (k == "frames") frames = std::stoi(v);
+    else if (k == "iterations") iterations = std::stoi(v);
+    else overrides.emplace_back(k, v);
+  }
+  Timer tb;
+  const test::PrimalCase c = test::primal_case(parts[0], overrides, frames, iterations);
+  std::printf("%s: dual rows %ld nnz %ld, K rows %ld nnz %ld (built in %.1f s)\n", spec.c_str(), (long)c.A().rows(),
+              (long)c.A().nonZeros(), (long)c.K.rows(), (long)c.K.nonZeros(), tb.seconds());
+  Params p;
+  p.linear_tol = 1e-8;
+  p.linear_max_iterations = 100000;
+  Vector x;
+  auto jac = make_linear_solver("jacobi-pcg", p);
+  jac->setup(c.A(), SetupKind::Structure, {});
+  const LinearStats ds = jac->solve(c.b, x);
+  std::printf("  jacobi-pcg A: its %d solve %.3f s\n", ds.iterations, ds.solve_time);
+  jac = make_linear_solver("jacobi-pcg", p);
+  jac->set_relative_residual(c.dual_measure());
+  jac->setup(c.K, SetupKind::Structure, {});
+  const LinearStats ks = jac->solve(c.f, x);
+  std::printf("  jacobi-pcg K: its %d solve %.3f s\n", ks.iterations, ks.solve_time);
+  std::fflush(stdout);
+  if (const char* dir = std::getenv("XB_AMG_DUMP")) {
+    // For outside tools (scripts, pyamg): K, f, the rigid modes, J, M⁻¹, α̃, b.
+    const std::string pre = std::string(dir) + "/" + parts[0];
+    Eigen::saveMarket(c.K, pre + "_K.mtx");
+    Eigen::saveMarket(c.J, pre + "_J.mtx");
+    Eigen::saveMarketVector(c.f, pre + "_f.mtx");
+    Eigen::saveMarketVector(c.b, pre + "_b.mtx");
+    Eigen::saveMarketVector(c.minv, pre + "_minv.mtx");
+    Eigen::saveMarketVector(c.alpha_tilde, pre + "_at.mtx");
+    Eigen::saveMarket(Eigen::SparseMatrix<double>(c.rigid.sparseView()), pre + "_B.mtx");
+  }
+  for (const std::string& v : variants) measure_variant(c, v);
+}
+}  // namespace
+
+TEST(AmgPrimalMeasure, DISABLED_Systems) {
+  const char* sys = std::getenv("XB_AMG_SYSTEMS");
+  const char* var = std::getenv("XB_AMG_VARIANTS");
+  const std::vector<std::string> systems =
+      split(sys ? sys : "cloth_hang/resolution=64/frames=3;bar_hang/resolution=8/frames=1", ';');
+  const std::vector<std::string> variants = split(var ? var : "default;theta=0;prol=tentative;diag=block", ';');
+  for (const std::string& s : systems) measure_system(s, variants);
+}
