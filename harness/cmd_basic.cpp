@@ -28,7 +28,7 @@ int cmd_list(const CommandArgs& argv) {
 
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
-            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}});
+            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}, {"--profile"}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
   const std::string out = args.require("--out");
@@ -36,7 +36,7 @@ int cmd_run(const CommandArgs& argv) {
   if (args.has("--variant")) sets.push_back("variant=" + args.get("--variant"));  // explicit --set keys win
   if (args.has("--frames")) sets.push_back("frames=" + args.get("--frames"));
   for (const auto& s : args.all("--set")) sets.push_back(s);
-  const Params p = resolve_params(scene, sets);
+  const Params p = resolve_params(scene, sets, args.get("--profile", ""));  // scene < profile < --set
   const auto runs = method_runs(parse_methods(args.require("--solver")), args.get("--form", ""));
   RunOptions opt;
   opt.time_budget = args.get_double("--time-budget", 0);

@@ -1,6 +1,7 @@
 #include "common.hpp"
 
 #include "../problems/error.hpp"
+#include "profile.hpp"
 #include "reference.hpp"
 #include "../problems/scene.hpp"
 #include "../solvers/distributed.hpp"
@@ -26,9 +27,10 @@
 
 namespace xb {
 
-Params resolve_params(const std::string& scene, const std::vector<std::string>& sets) {
+Params resolve_params(const std::string& scene, const std::vector<std::string>& sets, const std::string& profile) {
   Params p;
   load_scene_file(resolve_scene(scene), p);
+  if (!profile.empty()) apply_profile(profile, p);
   for (const auto& kv : sets) apply_set(p, kv);
   validate(p);
   return p;
@@ -135,6 +137,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.attrs["scene"] = p.scene;
   r.attrs["solver"] = method;
   r.attrs["form_used"] = res.form_used;
+  r.attrs["profile"] = p.profile;
   r.attrs["status"] = res.status;
   r.attrs["message"] = res.message;
   r.attrs["outer_iterations"] = res.outer_iterations;
@@ -151,12 +154,15 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.datasets["iteration"] = L.iteration;
   r.datasets["dual_residual"] = L.dual_residual;
   r.datasets["relative_dual_residual"] = L.relative_dual_residual;
+  r.datasets["authors_dual_residual"] = L.authors_dual_residual;
+  r.datasets["authors_relative_dual_residual"] = L.authors_relative_dual_residual;
   r.datasets["primal_residual"] = L.primal_residual;
   r.datasets["energy"] = L.energy;
   r.datasets["wall_time"] = L.wall_time;
   r.datasets["step_time"] = L.step_time;
   const MethodInfo* m = find_method(method);
   if (m && !m->local) {
+    r.datasets["step_length"] = L.step_length;
     r.datasets["linear_iterations"] = L.linear_iterations;
     r.datasets["linear_setup_time"] = L.linear_setup_time;
     r.datasets["linear_solve_time"] = L.linear_solve_time;

@@ -10,8 +10,10 @@
 
 namespace xb {
 
-// defaults ← the scene spec ← --set key=value overrides (in order), then validate().
-Params resolve_params(const std::string& scene_name_or_file, const std::vector<std::string>& sets);
+// defaults ← the scene spec ← the profile (harness/profile.hpp; "" = none) ← --set key=value
+// overrides (in order), then validate().
+Params resolve_params(const std::string& scene_name_or_file, const std::vector<std::string>& sets,
+                      const std::string& profile = "");
 // "key=value" → set_param (where = "--set").
 void apply_set(Params& p, const std::string& key_value);
 

@@ -2,6 +2,7 @@
 
 #include "stability.hpp"
 
+#include "line_search.hpp"
 #include "primal_solve.hpp"
 #include "reference.hpp"
 
@@ -67,11 +68,18 @@ class Simulation {
   struct LastStep {
     LinearStats linear;
     double time = 0;
+    double length = 0;  // step length (global methods)
     std::string action;
   };
+  // The two residuals of one evaluation: the true one and the authors' (IterationLog).
+  struct Residuals {
+    double dual, authors;
+  };
   void substep(int frame, int sub);
-  // Logs the state at iteration `it`; returns the dual residual.
-  double log_state(int frame, int sub, int it, const LastStep& last, double& r0);
+  // Logs the state at iteration `it`; returns both residuals.
+  Residuals log_state(int frame, int sub, int it, const LastStep& last, double& r0);
+  // x += step·Δx, λ += (1 or t)·Δλ by Params::step; returns the step length.
+  double apply_global_step(double current_dual);
   // The method step from the state just evaluated; false if the run must stop.
   bool step(int frame, int sub, int it, LastStep& last);
   void fail(const std::string& status, const std::string& msg) {
@@ -100,7 +108,9 @@ class Simulation {
   double ref_scale_ = 0;  // ‖x_ref − x̃‖_M
   double excluded_ = 0;   // s of the substep spent on the reference and the error, taken off every clock
   Eigen::VectorXd lambda_, b_, dlambda_;
-  ConstraintState state_;
+  Eigen::VectorXd c_authors_;  // the C of the authors' logged residual (C(x̃) local, C(x_{k−1}) global)
+  ConstraintState state_, trial_state_;
+  Eigen::Matrix3Xd x_trial_;
   bool first_setup_ = true, stop_ = false, any_max_iterations_ = false;
 };
 
@@ -113,7 +123,7 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
     res_.reference_time += ref_clock.seconds();
   }
   if (find_method(method)->local) {
-    local_.emplace(prob_, ds_, p, method == "xpbd-gs");
+    local_.emplace(prob_, ds_, p, local_kind(method));
     res_.form_used = "none";
   } else {
     res_.form_used = resolve_form(p.form, alpha_tilde_);
@@ -165,8 +175,11 @@ void Simulation::substep(int frame, int sub) {
   double r0 = 0;
   bool converged = false;
   LastStep last;
+  const bool authors_stop = p_.residual_metric == "authors";
   for (int it = 0;; ++it) {
-    const double dual = log_state(frame, sub, it, last, r0);
+    const Residuals r = log_state(frame, sub, it, last, r0);
+    const double dual = r.dual;
+    const double stop_metric = authors_stop ? r.authors : dual;  // r0 is the same for both
     const std::string where = " at frame " + std::to_string(frame) + ", iteration " + std::to_string(it);
     if (!std::isfinite(dual) || !P.x.allFinite()) {
       fail("nan", "non-finite positions or dual residual" + where);
@@ -176,7 +189,7 @@ void Simulation::substep(int frame, int sub) {
       fail("diverged", "dual residual grew by more than 1e8 over its first value" + where);
       break;
     }
-    if (dual <= p_.rtol * r0 || dual <= p_.atol) {
+    if (stop_metric <= p_.rtol * r0 || stop_metric <= p_.atol) {
       converged = true;
       break;
     }
@@ -204,11 +217,14 @@ void Simulation::substep(int frame, int sub) {
   if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
 }
 
-double Simulation::log_state(int frame, int sub, int it, const LastStep& last, double& r0) {
+Simulation::Residuals Simulation::log_state(int frame, int sub, int it, const LastStep& last, double& r0) {
   const Particles& P = prob_.particles;
+  if (it > 0 && !local_) c_authors_ = state_.C;  // global: C(x_{k−1}), before it is re-evaluated
   evaluate_constraints(prob_, P.x, state_);
+  if (it == 0) c_authors_ = state_.C;  // C(x̃); local methods keep it for the whole substep
   b_ = -(state_.C + alpha_tilde_.cwiseProduct(lambda_));
   const double dual = b_.norm();
+  const double authors = (c_authors_ + alpha_tilde_.cwiseProduct(lambda_)).norm();
   if (it == 0) r0 = dual;
   IterationLog& L = res_.log;
   L.frame.push_back(frame);
@@ -216,6 +232,8 @@ double Simulation::log_state(int frame, int sub, int it, const LastStep& last, d
   L.iteration.push_back(it);
   L.dual_residual.push_back(dual);
   L.relative_dual_residual.push_back(r0 > 0 ? dual / r0 : 0);
+  L.authors_dual_residual.push_back(authors);
+  L.authors_relative_dual_residual.push_back(r0 > 0 ? authors / r0 : 0);
   L.primal_residual.push_back(primal_residual(prob_, ds_, state_, P.x, x_pred_, lambda_, work_));
   L.energy.push_back(incremental_energy(prob_, state_, P.x, x_pred_, h_));
   if (reference_) {
@@ -230,6 +248,7 @@ double Simulation::log_state(int frame, int sub, int it, const LastStep& last, d
   const LastStep none;
   const LastStep& s = it == 0 ? none : last;
   L.step_time.push_back(s.time);
+  L.step_length.push_back(s.length);
   L.linear_iterations.push_back(s.linear.iterations);
   L.linear_setup_time.push_back(s.linear.setup_time);
   L.linear_solve_time.push_back(s.linear.solve_time);
@@ -241,7 +260,8 @@ double Simulation::log_state(int frame, int sub, int it, const LastStep& last, d
   L.linear_history_offset.push_back(static_cast<long long>(L.linear_history_residual.size()));
   res_.final_dual_residual = dual;
   res_.relative_dual_residual = r0 > 0 ? dual / r0 : 0;
-  return dual;
+  res_.stats["final_authors_dual_residual"] = authors;
+  return {dual, authors};
 }
 
 bool Simulation::step(int frame, int sub, int it, LastStep& last) {
@@ -273,10 +293,23 @@ bool Simulation::step(int frame, int sub, int it, LastStep& last) {
                           std::to_string(it) + ": " + last.linear.message);
     return false;
   }
-  lambda_ += dlambda_;
-  ds_.apply_minv_gradT(state_, dlambda_, dx_);
-  P.x += p_.omega * dx_;
+  last.length = apply_global_step(b_.norm());
   return true;
+}
+
+double Simulation::apply_global_step(double current_dual) {
+  Particles& P = prob_.particles;
+  ds_.apply_minv_gradT(state_, dlambda_, dx_);
+  if (p_.step == "line_search") {
+    const LineSearchStep ls = backtrack_dual_residual(prob_, P.x, lambda_, dx_, dlambda_, alpha_tilde_,
+                                                      current_dual, trial_state_, x_trial_);
+    lambda_ += ls.t * dlambda_;
+    P.x += ls.t * dx_;
+    return ls.t;
+  }
+  lambda_ += dlambda_;
+  P.x += p_.omega * dx_;
+  return p_.omega;
 }
 
 void Simulation::finish() {
@@ -292,6 +325,7 @@ void Simulation::finish() {
   }
   if (local_ && method_ == "xpbd-gs") res_.stats["colors"] = local_->num_colors();
   if (local_ && method_ == "xpbd-jacobi") res_.stats["jacobi_relaxation_used"] = local_->relaxation();
+  if (local_ && method_ == "xpbd-authors") res_.stats["authors_skipped_last_sweep"] = static_cast<double>(local_->skipped());
   // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
   // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
   if (stability_.has_tets()) res_.arrays["inverted_tets"] = stability_.inverted_tets();

@@ -26,10 +26,18 @@ struct IterationLog {
   std::vector<long long> frame, substep, iteration;
   std::vector<double> dual_residual;           // ‖C + α̃λ‖₂
   std::vector<double> relative_dual_residual;  // over the substep's iteration 0
+  // The dual residual as the authors' code logs it (never the true one after iteration 0):
+  //  - local methods (xpbd-*): ‖C(x̃) + α̃λ_k‖, C evaluated once, at the substep's predicted x̃;
+  //  - global methods: ‖C(x_{k−1}) + α̃λ_k‖, C of the state before step k, λ after it.
+  // Equal to dual_residual at iteration 0. The relative one is over that same iteration-0 value.
+  std::vector<double> authors_dual_residual, authors_relative_dual_residual;
   std::vector<double> primal_residual;         // ‖M(x − x̃) − ∇Cᵀλ‖₂ over free particles
   std::vector<double> energy;                  // ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) (α > 0)
   std::vector<double> wall_time;               // s since the substep began
   std::vector<double> step_time;               // s in the method step (assembly + setup + solve, or sweep)
+  // Global methods: the step length of the step that led here (ω for step = fixed, the line
+  // search's t for step = line_search); 0 at iteration 0 and for local methods.
+  std::vector<double> step_length;
   std::vector<long long> linear_iterations;
   std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
   std::vector<std::string> linear_setup_action;

@@ -26,12 +26,21 @@ struct Params {
   double prestretch = 1.0;           // initial stretch of generated bars along their length (1 = at rest)
   double twist = 0;                  // rad: twist_bar's initial twist of the bar about its long axis, end to end
   double mass_ratio = 1;             // heaviest/lightest particle: mass_i = particle_mass·(1 + (ratio−1)(i/(n−1))²)
+  double mesh_height = 0;            // m: mesh scenes scale the mesh so its y extent is this (0 = as the file is)
+  std::string init = "none";         // squash start: none (collapsed) | enlarge (rest mesh x1.5 about its centroid)
   std::string variant = "none";      // extreme case (problems/scene.hpp: apply_variant); setting it also sets the keys it implies
   // --- outer (nonlinear) loop ---
   int max_iterations = 100;          // outer iterations per substep
   double rtol = 1e-6;                // stop when ‖C+α̃λ‖ ≤ rtol·(its value at iteration 0)
   double atol = 1e-12;               // or when ‖C+α̃λ‖ ≤ atol
   double omega = 1.0;                // global step x += ω M⁻¹∇CᵀΔλ (paper's code: 0.1 soft, 0.25 cloth)
+  // Which dual residual the stop test (rtol/atol) reads: true ‖C(x_k) + α̃λ_k‖ | authors (the
+  // quantity the authors' code logs, harness/stepper.hpp: IterationLog::authors_dual_residual).
+  std::string residual_metric = "true";
+  // Global step: fixed (x += ω M⁻¹∇CᵀΔλ, λ += Δλ) | line_search (the authors' backtracking on the
+  // dual residual, harness/line_search.hpp; ω unused).
+  std::string step = "fixed";
+  double position_relaxation = 0.1;  // xpbd-authors: x += this·M⁻¹∇CᵀΔλ while λ takes the full Δλ
   double jacobi_relaxation = 0;      // xpbd-jacobi: λ += ωJ·Δλ, x += ωJ·M⁻¹∇CᵀΔλ; 0 = 1/(most constraints on one particle)
   int threads = 0;                   // OpenMP threads, 0 = OpenMP's default
   int seed = 1;
@@ -66,6 +75,9 @@ struct Params {
   int muelu_smoother_sweeps = 1;
   int muelu_coarse_size = 400;
   std::string muelu_reuse = "RP";  // none | tP | RP: MueLu "reuse: type" for Values setups
+  // The profile the parameters came from ("" = none; harness/profile.hpp). Not a key of the field
+  // table (a profile is a set of keys, not one): simulation runs record it as the attribute `profile`.
+  std::string profile;
 };
 
 // One entry of the field table.

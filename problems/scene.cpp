@@ -179,9 +179,18 @@ Problem build_bar_hang(const Params& p) {
 
 // ---- issue 5: the paper's scenes. Each takes its mesh from the `mesh` key (load_tet_mesh).
 
+// Uniform scaling about the origin so that the y extent is `height` m: the rest shape (volumes,
+// hence α = 1/(μV)) scales with it, as when the authors load their 0.2 m bunny.
+void scale_to_height(TetMesh& m, double height) {
+  const double extent = m.vertices.row(1).maxCoeff() - m.vertices.row(1).minCoeff();
+  if (!(extent > 0)) throw Error("parameter 'mesh_height': the mesh has no y extent to scale");
+  m.vertices *= height / extent;
+}
+
 Problem tet_scene(const std::string& name, const Params& p, const std::string& fallback_mesh, TetMesh* mesh_out = nullptr) {
   MeshReadReport report;
   TetMesh m = load_tet_mesh(p.mesh, p, fallback_mesh, &report);
+  if (p.mesh_height > 0) scale_to_height(m, p.mesh_height);
   if (p.variant == "near_degenerate") flatten_some_tets(m);
   Problem prob = make_tet_problem(name, m, p);
   if (mesh_out) *mesh_out = std::move(m);
@@ -190,10 +199,18 @@ Problem tet_scene(const std::string& name, const Params& p, const std::string& f
 
 // Figs. 13/17: every vertex collapsed to the minimum y of the mesh, released; no gravity.
 // The rest shape is the mesh itself, so every tet starts flat (σ₃ = 0, C = 1).
+// init = enlarge instead starts from the rest mesh scaled ×1.5 about its centroid (the authors'
+// `enlarge` reinit of the same scene; their near-kernel table is its first solve).
 Problem build_squash(const Params& p) {
   Problem prob = tet_scene("squash", p, "ball");
-  const double ymin = prob.particles.x.row(1).minCoeff();
-  prob.particles.x.row(1).setConstant(ymin);
+  Eigen::Matrix3Xd& x = prob.particles.x;
+  if (p.init == "enlarge") {
+    const Eigen::Vector3d c = x.rowwise().mean();
+    x = ((x.colwise() - c) * 1.5).colwise() + c;
+    return prob;
+  }
+  const double ymin = x.row(1).minCoeff();
+  x.row(1).setConstant(ymin);
   return prob;
 }
 
@@ -337,6 +354,13 @@ const std::vector<BuilderInfo>& scene_builders() {
 
 Problem build_problem(const Params& p) {
   validate(p);
+  // Scene keys that only some builders read are refused elsewhere rather than silently ignored.
+  const bool mesh_scene = p.scene == "squash" || p.scene == "twist_bar" || p.scene == "cantilever" || p.scene == "ball_drop";
+  if (p.mesh_height != 0 && !mesh_scene)
+    throw Error("parameter 'mesh_height' applies to the mesh scenes (squash, twist_bar, cantilever, ball_drop), not '" +
+                p.scene + "'");
+  if (p.init != "none" && p.scene != "squash")
+    throw Error("parameter 'init' = '" + p.init + "' applies to the squash scene only, not '" + p.scene + "'");
   for (const auto& b : scene_builders())
     if (b.name == p.scene) {
       Problem prob = b.build(p);

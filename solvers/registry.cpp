@@ -22,6 +22,7 @@ const std::vector<Entry>& entries() {
   static const std::vector<Entry> e = {
       {{"xpbd-jacobi", true, true, "", "one Jacobi sweep of Eq. 10 per outer iteration (relaxed by xpbd.jacobi_relaxation)"}, nullptr},
       {{"xpbd-gs", true, true, "", "one Gauss-Seidel sweep of Eq. 10 per outer iteration (graph-coloured, parallel)"}, nullptr},
+      {{"xpbd-authors", true, true, "", "the authors' XPBD baseline: Jacobi sweep, full dlambda, x relaxed by xpbd.position_relaxation, C <= 1e-6 skipped"}, nullptr},
       {{"cholmod", false, true, "", "Goldenthal's direct solve: CHOLMOD supernodal Cholesky of the global system"}, make_cholmod},
       {{"cg", false, true, "", "conjugate gradients on the global system"}, make_cg},
       {{"jacobi-pcg", false, true, "", "Jacobi-preconditioned conjugate gradients on the global system"}, make_jacobi_pcg},

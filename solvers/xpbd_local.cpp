@@ -1,13 +1,29 @@
 #include "xpbd_local.hpp"
 
+#include "../problems/error.hpp"
+
 #include <algorithm>
 
 namespace xb {
 
-LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, bool gauss_seidel)
-    : prob_(prob), ds_(ds), gs_(gauss_seidel), relaxation_(p.jacobi_relaxation) {
+namespace {
+// xpbd-authors skips constraints already (nearly) satisfied: C ≤ this.
+constexpr double authors_skip_below = 1e-6;
+}  // namespace
+
+LocalKind local_kind(const std::string& method) {
+  if (method == "xpbd-jacobi") return LocalKind::jacobi;
+  if (method == "xpbd-gs") return LocalKind::gauss_seidel;
+  if (method == "xpbd-authors") return LocalKind::authors;
+  throw Error("'" + method + "' is not a local method (valid: xpbd-jacobi, xpbd-gs, xpbd-authors)");
+}
+
+LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, LocalKind kind)
+    : prob_(prob), ds_(ds), kind_(kind), gs_(kind == LocalKind::gauss_seidel), relaxation_(p.jacobi_relaxation) {
   if (gs_) coloring_ = greedy_coloring(ds.A());
-  if (relaxation_ == 0) {
+  if (kind_ == LocalKind::authors) {
+    relaxation_ = p.position_relaxation;
+  } else if (relaxation_ == 0) {
     int n_max = 1;
     const auto& start = ds.incidence_start();
     for (int i = 0; i < prob.particles.size(); ++i)
@@ -18,24 +34,12 @@ LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const Params
 
 void LocalMethod::sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
                         const ConstraintState& state) {
-  const Eigen::VectorXd& w = prob_.particles.w;
-  const int nd = static_cast<int>(prob_.distance.size());
   if (!gs_) {
-    const int m = prob_.num_constraints();
-    dlambda_.resize(m);
-#pragma omp parallel for schedule(static)
-    for (int j = 0; j < m; ++j) {
-      const auto ps = prob_.constraint_particles(j);
-      double Ajj = alpha_tilde[j];
-      for (int s = 0; s < 4; ++s)
-        if (ps[s] >= 0) Ajj += w[ps[s]] * state.grad[j][s].squaredNorm();
-      dlambda_[j] = Ajj > 0 ? relaxation_ * (-state.C[j] - alpha_tilde[j] * lambda[j]) / Ajj : 0.0;
-    }
-    lambda += dlambda_;
-    ds_.apply_minv_gradT(state, dlambda_, dx_);
-    x += dx_;
+    jacobi_sweep(x, lambda, alpha_tilde, state);
     return;
   }
+  const Eigen::VectorXd& w = prob_.particles.w;
+  const int nd = static_cast<int>(prob_.distance.size());
   for (int c = 0; c < coloring_.num_colors; ++c) {
     const int begin = coloring_.color_start[c], end = coloring_.color_start[c + 1];
 #pragma omp parallel for schedule(static)
@@ -61,6 +65,35 @@ void LocalMethod::sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eige
         if (ps[s] >= 0 && w[ps[s]] > 0) x.col(ps[s]) += w[ps[s]] * dl * g[s];
     }
   }
+}
+
+void LocalMethod::jacobi_sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
+                               const ConstraintState& state) {
+  const Eigen::VectorXd& w = prob_.particles.w;
+  const int m = prob_.num_constraints();
+  const bool authors = kind_ == LocalKind::authors;
+  // xpbd-jacobi relaxes Δλ itself (λ and x stay consistent); xpbd-authors relaxes only Δx below.
+  const double lambda_relaxation = authors ? 1.0 : relaxation_;
+  dlambda_.resize(m);
+  long long skipped = 0;
+#pragma omp parallel for schedule(static) reduction(+ : skipped)
+  for (int j = 0; j < m; ++j) {
+    if (authors && state.C[j] <= authors_skip_below) {
+      dlambda_[j] = 0;
+      ++skipped;
+      continue;
+    }
+    const auto ps = prob_.constraint_particles(j);
+    double Ajj = alpha_tilde[j];
+    for (int s = 0; s < 4; ++s)
+      if (ps[s] >= 0) Ajj += w[ps[s]] * state.grad[j][s].squaredNorm();
+    dlambda_[j] = Ajj > 0 ? lambda_relaxation * (-state.C[j] - alpha_tilde[j] * lambda[j]) / Ajj : 0.0;
+  }
+  skipped_ = skipped;
+  lambda += dlambda_;
+  ds_.apply_minv_gradT(state, dlambda_, dx_);
+  if (authors) x += relaxation_ * dx_;
+  else x += dx_;
 }
 
 }  // namespace xb

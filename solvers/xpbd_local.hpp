@@ -14,6 +14,10 @@
 //    its constraints' corrections (the averaging of Macklin et al. 2014, made uniform). It is
 //    conservative (0.125 on the cloth grid, 1/24 inside the tet bar) but did not diverge on
 //    any scene here, where ω_J = 0.25 diverges on bar_hang.
+//  - xpbd-authors: the authors' XPBD baseline (their public code): a Jacobi sweep in which λ
+//    takes the full Δλ but x only ω_x·Δx, ω_x = xpbd.position_relaxation (0.1), so λ runs ahead
+//    of x; constraints with C ≤ 1e-6 are skipped (Δλ = 0). The skip is kept literally, one-sided
+//    as theirs: meant for ARAP (C ≥ 0), it also skips every compressed distance constraint.
 #pragma once
 
 #include "../problems/dual_system.hpp"
@@ -23,21 +27,33 @@
 
 namespace xb {
 
+enum class LocalKind { jacobi, gauss_seidel, authors };
+// The kind of a local method's name (xpbd-jacobi, xpbd-gs, xpbd-authors); throws for another name.
+LocalKind local_kind(const std::string& method);
+
 class LocalMethod {
  public:
-  LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, bool gauss_seidel);
+  LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, LocalKind kind);
+  LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, bool gauss_seidel)
+      : LocalMethod(prob, ds, p, gauss_seidel ? LocalKind::gauss_seidel : LocalKind::jacobi) {}
   // One sweep: updates x and λ. `state` holds C and ∇C at the current x (Jacobi uses it;
   // Gauss–Seidel re-evaluates each constraint at the positions of the moment).
   void sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
              const ConstraintState& state);
   int num_colors() const { return coloring_.num_colors; }
   double relaxation() const { return relaxation_; }
+  // xpbd-authors: constraints skipped (C ≤ 1e-6) in the last sweep.
+  long long skipped() const { return skipped_; }
 
  private:
+  void jacobi_sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
+                    const ConstraintState& state);
   const Problem& prob_;
   const DualSystem& ds_;
+  LocalKind kind_;
   bool gs_;
-  double relaxation_;
+  double relaxation_;        // of λ and x (jacobi), of x only (authors)
+  long long skipped_ = 0;
   Coloring coloring_;
   Eigen::VectorXd dlambda_;
   Eigen::Matrix3Xd dx_;
