@@ -53,6 +53,20 @@ def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "rela
     return runs
 
 
+METRICS = ("true", "authors")
+
+
+def residual_key(metric="true", relative=False):
+    """The dataset of a residual metric (results/README.md): true = dual_residual, authors =
+    authors_dual_residual (what the MGPBD authors' code logs); relative_ prefixed if relative."""
+    if metric not in METRICS:
+        raise ValueError(f"unknown residual metric {metric!r} (valid: {', '.join(METRICS)})")
+    base = "dual_residual" if metric == "true" else "authors_dual_residual"
+    if relative:
+        return "relative_dual_residual" if metric == "true" else "authors_relative_dual_residual"
+    return base
+
+
 def cumulative_time(run):
     """Wall time running over the whole run (each substep's clock restarts at 0)."""
     wt = np.asarray(run["data"]["wall_time"], dtype=float)
