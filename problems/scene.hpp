@@ -2,7 +2,7 @@
 // names the builder that turns the parameters into a Problem.
 #pragma once
 
-#include "mesh.hpp"
+#include "meshes/mesh.hpp"
 #include "params.hpp"
 #include "problem.hpp"
 

@@ -1,6 +1,6 @@
 // The assembled dual system against a dense J M⁻¹ Jᵀ + α̃, with pins.
 #include "problems/dual_system.hpp"
-#include "problems/generators.hpp"
+#include "problems/meshes/generators.hpp"
 #include "problems/params.hpp"
 #include "problems/scene.hpp"
 

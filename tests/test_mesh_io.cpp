@@ -3,9 +3,9 @@
 // trips through each format, and the generators. Also built as test_mesh_io_asan under
 // AddressSanitizer + UndefinedBehaviorSanitizer.
 #include "problems/error.hpp"
-#include "problems/generators.hpp"
-#include "problems/mesh_io.hpp"
-#include "problems/real_meshes.hpp"
+#include "problems/meshes/generators.hpp"
+#include "problems/meshes/mesh_io.hpp"
+#include "problems/meshes/real_meshes.hpp"
 
 #include <gtest/gtest.h>
 

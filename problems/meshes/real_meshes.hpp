@@ -9,7 +9,7 @@
 
 #include "mesh.hpp"
 #include "mesh_io.hpp"
-#include "params.hpp"
+#include "../params.hpp"
 
 #include <string>
 

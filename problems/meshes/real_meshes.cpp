@@ -1,6 +1,6 @@
 #include "real_meshes.hpp"
 
-#include "error.hpp"
+#include "../error.hpp"
 #include "generators.hpp"
 
 #include <cstdlib>
