@@ -23,7 +23,7 @@ struct Command {
 const Command commands[] = {
     {"list", xb::cmd_list, "list                                  scenes and solvers, one per line"},
     {"run", xb::cmd_run,
-     "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--reference] --out FILE.h5"},
+     "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--reference] [--save-state FILE --frame-of-state F] [--load-state FILE] --out FILE.h5"},
     {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
     {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--time-budget S]   (resumes: skips runs already in FILE)"},
     {"capture", xb::cmd_capture,

@@ -138,9 +138,19 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
 
 RunResult Simulation::run() {
   try {
-    for (int frame = 0; frame < p_.frames && !stop_; ++frame) {
+    int start = 0;
+    if (const SimState* s = opt_.initial_state) {
+      if (s->x.cols() != prob_.particles.size() || s->v.cols() != prob_.particles.size())
+        throw Error("the loaded state has " + std::to_string(s->x.cols()) + " particles, the scene " +
+                    std::to_string(prob_.particles.size()));
+      prob_.particles.x = s->x;
+      prob_.particles.v = s->v;
+      start = s->frame;
+    }
+    for (int frame = start; frame < start + p_.frames && !stop_; ++frame) {
       for (int sub = 0; sub < p_.substeps && !stop_; ++sub) substep(frame, sub);
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
+      if (!stop_ && opt_.on_state) opt_.on_state(SimState{frame + 1, prob_.particles.x, prob_.particles.v});
     }
   } catch (const std::exception& e) {
     fail("error", e.what());

@@ -11,6 +11,7 @@
 #include "../problems/params.hpp"
 #include "../problems/problem.hpp"
 #include "../problems/sparse.hpp"
+#include "state_io.hpp"
 
 #include <functional>
 #include <map>
@@ -91,6 +92,11 @@ struct RunOptions {
   std::function<bool(const SystemView&)> on_system;
   // Called after every frame with the positions (for mesh output).
   std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
+  // Called after every frame with the state the next frame starts from (for --save-state).
+  std::function<void(const SimState&)> on_state;
+  // Start from this state (positions, velocities; frames numbered from its frame) instead of
+  // the scene's start. Its particle count must match the problem's.
+  const SimState* initial_state = nullptr;
 };
 
 // Runs `method` (a name from methods()) on a copy of `prob`. Never throws for a numerical

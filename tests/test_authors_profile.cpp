@@ -5,6 +5,7 @@
 #include "harness/common.hpp"
 #include "harness/line_search.hpp"
 #include "harness/profile.hpp"
+#include "harness/state_io.hpp"
 #include "harness/stepper.hpp"
 #include "problems/error.hpp"
 #include "problems/scene.hpp"
@@ -279,4 +280,26 @@ TEST(Profile, RecordedByRunAndReport) {
   std::stringstream text;
   text << std::ifstream(json).rdbuf();
   EXPECT_NE(text.str().find("\"profile\": \"authors\""), std::string::npos);
+}
+
+// A run saved after frame 1 and resumed from the file ends bit for bit where the uninterrupted
+// run ends; the same frame run from the scene's start does not.
+TEST(StateCheckpoint, LoadedRunContinuesTheSavedTrajectory) {
+  const test::TempDir dir;
+  const std::string bench = "OMP_NUM_THREADS=1 " + std::string(XB_BINARY_DIR) + "/xpbd-bench";
+  const std::string base = " run --scene squash --set resolution=4 --solver xpbd-gs";
+  const std::string state = dir / "s.h5", full = dir / "full.h5", resumed = dir / "resumed.h5", fresh = dir / "fresh.h5";
+  auto run = [&](const std::string& args) { return std::system((bench + base + args + " >/dev/null 2>&1").c_str()); };
+  ASSERT_EQ(run(" --frames 3 --save-state " + state + " --frame-of-state 1 --out " + full), 0);
+  ASSERT_EQ(run(" --frames 1 --load-state " + state + " --out " + resumed), 0);
+  ASSERT_EQ(run(" --frames 1 --out " + fresh), 0);
+  auto positions = [](const std::string& f) {
+    return std::get<std::vector<double>>(read_runs(f, true)[0].datasets.at("final_positions"));
+  };
+  EXPECT_EQ(positions(full), positions(resumed));
+  EXPECT_NE(positions(fresh), positions(resumed));
+  const auto frames = std::get<std::vector<long long>>(read_runs(resumed, true)[0].datasets.at("frame"));
+  EXPECT_EQ(frames.front(), 2);  // numbered on from the saved frame
+  EXPECT_EQ(read_state(state).frame, 2);
+  EXPECT_NE(run(" --load-state " + full + " --out " + fresh), 0);  // a results file is not a state
 }
