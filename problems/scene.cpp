@@ -1,8 +1,8 @@
 #include "scene.hpp"
 
 #include "error.hpp"
-#include "generators.hpp"
-#include "real_meshes.hpp"
+#include "meshes/generators.hpp"
+#include "meshes/real_meshes.hpp"
 
 #include <toml++/toml.h>
 
