@@ -25,12 +25,13 @@ demo: build
 	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-jacobi,xpbd-gs,jacobi-pcg,cholmod,mgpbd --form dual,primal --out results/demo.h5
 	$(PYTHON) plots/convergence.py results/demo.h5 -o plots/demo_convergence.png
 
-# The paper's claims (figures/*.toml; FIGURES_SIZE=paper for figures/paper/*.toml): sweeps into
+# The paper's claims (figures/*.toml, one spec per figure; FIGURES_SIZE=paper applies each spec's
+# [sizes.paper] table): figures/run.py runs the sweeps into
 # plots/figures/data/, figures and plots/figures/summary.md. Rerunning resumes unfinished sweeps;
 # FIGURES_ARGS="--fresh" starts them again, "--only squash_mgpbd,theta" selects specs.
 FIGURES_SIZE ?= default
 figures: build
-	$(PYTHON) plots/figures.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
+	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -69,11 +69,12 @@ void print_table(const std::vector<std::vector<std::string>>& rows) {
 }  // namespace
 
 int cmd_sweep(const CommandArgs& argv) {
-  Args args("sweep", argv, {{"--out"}, {"--time-budget"}}, 1);
-  if (args.positional().empty()) throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--time-budget S])");
+  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}}, 1);
+  if (args.positional().empty())
+    throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--time-budget S])");
   const std::string out = args.require("--out");
   // The whole spec and every combination are checked before anything runs.
-  SweepSpec spec = parse_sweep_spec(args.positional()[0]);
+  SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"));
   if (args.has("--time-budget")) {
     spec.time_budget = args.get_double("--time-budget", 0);
     if (spec.time_budget < 0) throw Error("sweep: --time-budget must be >= 0");

@@ -84,10 +84,45 @@ std::string canonical_value(const Params& p, const std::string& key) {
   return std::get<std::string>(v);
 }
 
-SweepSpec parse_sweep_spec(const std::string& path) {
+namespace {
+// The spec's entries at one size: a [sizes.NAME] table's keys (frames, time_budget, set.*,
+// grid.*, ...) replace or add to the top-level ones; the other sizes are dropped. "default"
+// needs no table. Throws for an unknown size, naming the ones the spec has.
+std::vector<TomlEntry> entries_at_size(const std::string& path, const std::string& size) {
+  std::vector<TomlEntry> base, sized;
+  std::vector<std::string> sizes;
+  for (auto e : read_toml_flat(path)) {
+    if (e.key.rfind("sizes.", 0) != 0) {
+      base.push_back(std::move(e));
+      continue;
+    }
+    const std::string rest = e.key.substr(6);
+    const size_t dot = rest.find('.');
+    const std::string name = rest.substr(0, dot);
+    if (dot == std::string::npos) throw Error(path + ":" + std::to_string(e.line) + ": '" + e.key + "' must be a table ([sizes." + name + "])");
+    if (std::find(sizes.begin(), sizes.end(), name) == sizes.end()) sizes.push_back(name);
+    if (name != size) continue;
+    e.key = rest.substr(dot + 1);
+    sized.push_back(std::move(e));
+  }
+  if (size != "default" && std::find(sizes.begin(), sizes.end(), size) == sizes.end())
+    throw Error(path + ": no size '" + size + "' (sizes: default" + (sizes.empty() ? "" : ", " + join(sizes)) + ")");
+  for (auto& e : sized) {
+    auto same = std::find_if(base.begin(), base.end(), [&](const TomlEntry& b) { return b.key == e.key; });
+    if (same != base.end())
+      *same = std::move(e);
+    else
+      base.push_back(std::move(e));
+  }
+  return base;
+}
+}  // namespace
+
+SweepSpec parse_sweep_spec(const std::string& path, const std::string& size) {
   SweepSpec spec;
   spec.path = path;
-  const auto entries = read_toml_flat(path);
+  spec.size = size;
+  const auto entries = entries_at_size(path, size);
   auto where = [&](const TomlEntry& e) { return path + ":" + std::to_string(e.line); };
   auto scalar = [&](const TomlEntry& e) {
     if (e.is_array) throw Error(where(e) + ": '" + e.key + "' must be a single value, not a list");

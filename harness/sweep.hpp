@@ -13,6 +13,9 @@
 //   max_iterations = 50
 //   [grid]                              # the cartesian product of these lists
 //   "amg.strength_threshold" = [0.0, 0.1, 0.25]
+//   [sizes.paper]                       # optional: what changes at another size (sweep --size paper)
+//   time_budget = 600                   #   any key above; set.KEY / grid.KEY entries replace or add
+//   grid.resolution = [16, 32, 64]      #   to those of [set] / [grid]
 #pragma once
 
 #include "../problems/params.hpp"
@@ -25,6 +28,7 @@ namespace xb {
 
 struct SweepSpec {
   std::string path;                    // the spec file
+  std::string size = "default";        // the [sizes.NAME] table applied
   std::string scene;                   // resolved scene file
   std::vector<std::string> solvers;
   int repeats = 1;
@@ -47,9 +51,10 @@ struct SweepJob {
   std::string key;                     // base hash | point | solver | repeat: unique per job
 };
 
-// Reads and validates the whole spec: unknown keys, bad values, unknown or unavailable solvers,
-// empty lists, duplicate grid values. Throws xb::Error with one line naming file:line and key.
-SweepSpec parse_sweep_spec(const std::string& path);
+// Reads and validates the whole spec at one size: unknown keys, bad values, unknown or
+// unavailable solvers, empty lists, duplicate grid values, an unknown size. Throws xb::Error with
+// one line naming file:line and key.
+SweepSpec parse_sweep_spec(const std::string& path, const std::string& size = "default");
 
 // All jobs, grid point major, then solver, then repeat. Every job's Params are resolved and
 // validated here, so a bad combination fails before anything runs.

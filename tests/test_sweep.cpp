@@ -156,15 +156,44 @@ TEST(SweepSpec, CartesianProductRepeatsAndBaseHash) {
 // renamed key or solver shows up in the tests, not an hour into `make figures`.
 TEST(SweepSpec, FigureSpecsParse) {
   int n = 0;
-  for (const std::string dir : {"/figures", "/figures/paper"})
-    for (const auto& e : fs::directory_iterator(std::string(XB_SOURCE_DIR) + dir)) {
+  for (const auto& e : fs::directory_iterator(std::string(XB_SOURCE_DIR) + "/figures"))
+    for (const std::string size : {"default", "paper"}) {
       if (e.path().extension() != ".toml") continue;
-      SCOPED_TRACE(e.path().string());
-      const SweepSpec s = parse_sweep_spec(e.path().string());
+      SCOPED_TRACE(e.path().string() + " at size " + size);
+      const SweepSpec s = parse_sweep_spec(e.path().string(), size);
       EXPECT_FALSE(expand_sweep(s).empty());
       ++n;
     }
-  EXPECT_GE(n, 24);  // 12 specs per size, dual_primal and dual_primal_bar included
+  EXPECT_GE(n, 24);  // 12 specs at 2 sizes, dual_primal and dual_primal_bar included
+}
+
+// A [sizes.NAME] table changes only what it names: its scalars and set.* / grid.* entries replace
+// or add to the top-level ones; another size's table is ignored; an unknown size is refused.
+TEST(SweepSpec, SizeTablesReplaceOnlyWhatTheyName) {
+  const auto d = temp_dir("sizes");
+  const std::string spec = write(d / "s.toml",
+                                 "scene = \"bar_hang\"\nsolvers = [\"cholmod\"]\ntime_budget = 5\n"
+                                 "[set]\nmax_iterations = 7\nstiffness = 1e7\n[grid]\nresolution = [2, 3]\n"
+                                 "[sizes.big]\ntime_budget = 50\nset.max_iterations = 70\ngrid.resolution = [4]\n"
+                                 "grid.\"amg.strength_threshold\" = [0.0, 0.5]\n"
+                                 "[sizes.other]\nset.stiffness = 1e9\n");
+  const SweepSpec small = parse_sweep_spec(spec);
+  EXPECT_EQ(small.time_budget, 5);
+  EXPECT_EQ(expand_sweep(small).size(), 2u);
+  const SweepSpec big = parse_sweep_spec(spec, "big");
+  EXPECT_EQ(big.time_budget, 50);
+  const auto jobs = expand_sweep(big);
+  ASSERT_EQ(jobs.size(), 2u);  // resolution [4] × θ [0, 0.5]
+  EXPECT_EQ(jobs[0].params.resolution, 4);
+  EXPECT_EQ(jobs[0].params.max_iterations, 70);
+  EXPECT_EQ(jobs[0].params.stiffness, 1e7);  // [sizes.other] does not apply
+  EXPECT_EQ(jobs[1].params.amg_strength_threshold, 0.5);
+  try {
+    parse_sweep_spec(spec, "huge");
+    ADD_FAILURE() << "an unknown size was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no size 'huge' (sizes: default, big, other)"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SweepSpec, BadSpecsFailWithTheLine) {
