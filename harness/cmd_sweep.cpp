@@ -66,116 +66,81 @@ void print_table(const std::vector<std::vector<std::string>>& rows) {
   }
 }
 
-}  // namespace
-
-int cmd_sweep(const CommandArgs& argv) {
-  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}}, 1);
-  if (args.positional().empty())
-    throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--time-budget S])");
-  const std::string out = args.require("--out");
-  // The whole spec and every combination are checked before anything runs.
-  SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"));
-  if (args.has("--time-budget")) {
-    spec.time_budget = args.get_double("--time-budget", 0);
-    if (spec.time_budget < 0) throw Error("sweep: --time-budget must be >= 0");
+// The runs of this sweep already in `out` (sweep_key → run name) and how many runs it holds.
+// Throws if the file holds another sweep's runs.
+std::map<std::string, std::string> finished_runs(const std::string& out, const std::string& base, int& existing) {
+  std::map<std::string, std::string> finished;
+  existing = 0;
+  if (!std::filesystem::exists(out)) return finished;
+  const auto runs = read_runs(out, false);
+  existing = static_cast<int>(runs.size());
+  for (const auto& r : runs) {
+    const std::string b = attr_cell(r, "sweep_base");
+    if (b == "-") continue;
+    if (b != base)
+      throw Error("sweep: " + out + " holds runs of another sweep (different scene or fixed parameters, run " + r.name +
+                  "); write to another --out");
+    finished[attr_cell(r, "sweep_key")] = r.name;
   }
-  const std::vector<SweepJob> jobs = expand_sweep(spec);
-  const std::string base = sweep_base_hash(spec);
-  std::string swept;
-  for (const auto& [k, v] : spec.grid) swept += (swept.empty() ? "" : ",") + k;
+  return finished;
+}
 
-  // Resume: what is already in the file.
-  std::map<std::string, std::string> finished;  // sweep_key → run name
-  int existing = 0;
-  if (std::filesystem::exists(out)) {
-    const auto runs = read_runs(out, false);
-    existing = static_cast<int>(runs.size());
-    for (const auto& r : runs) {
-      const std::string b = attr_cell(r, "sweep_base");
-      if (b == "-") continue;
-      if (b != base)
-        throw Error("sweep: " + out + " holds runs of another sweep (different scene or fixed parameters, run " + r.name +
-                    "); write to another --out");
-      finished[attr_cell(r, "sweep_key")] = r.name;
-    }
+// One job: the problem of its grid point (built once per point, shared by its solvers and
+// repeats; run_simulation copies it), the run, its record with the sweep's attributes.
+class JobRunner {
+ public:
+  JobRunner(const SweepSpec& spec, std::string base, std::string swept)
+      : spec_(spec), base_(std::move(base)), swept_(std::move(swept)) {
+    opt_.time_budget = spec.time_budget;
+    opt_.reference = spec.reference;
   }
-  int todo = 0;
-  for (const auto& j : jobs) todo += finished.count(j.key) ? 0 : 1;
-
-  const bool tty = isatty(STDERR_FILENO);
-  const int total = static_cast<int>(jobs.size());
-  std::cerr << "sweep: " << spec.path << ": " << total << " runs (" << (total - todo) << " already in " << out << ", "
-            << todo << " to do)\n";
-  RunOptions opt;
-  opt.time_budget = spec.time_budget;
-  opt.reference = spec.reference;
-
-  int done = total - todo, index = existing;
-  double spent = 0;
-  int timed = 0;
-  std::unique_ptr<Problem> prob;
-  int prob_point = -1;
-  std::string prob_error;
-  for (const auto& job : jobs) {
-    if (finished.count(job.key)) continue;
-    const std::string what = describe(job, spec.repeats);
-    const double eta = timed > 0 ? spent / timed * (total - done) : -1;
-    if (tty) draw_bar(done, total, what, eta);
-    else std::cerr << "sweep: [" << done + 1 << "/" << total << "] " << what << " ..." << std::flush;
-    Timer clock;
-    // One problem per grid point, shared by its solvers and repeats (run_simulation copies it).
-    if (job.point != prob_point) {
-      prob.reset();
-      prob_error.clear();
-      prob_point = job.point;
+  RunRecord run(const SweepJob& job, int index, RunResult& res) {
+    if (job.point != point_) {
+      prob_.reset();
+      error_.clear();
+      point_ = job.point;
       try {
-        prob = std::make_unique<Problem>(build_problem(job.params));
+        prob_ = std::make_unique<Problem>(build_problem(job.params));
       } catch (const std::exception& e) {
-        prob_error = e.what();
+        error_ = e.what();
       }
     }
-    RunResult res;
-    if (prob) {
+    if (prob_) {
       try {
-        res = run_simulation(*prob, job.params, job.solver, opt);
+        res = run_simulation(*prob_, job.params, job.solver, opt_);
       } catch (const std::exception& e) {
         res.status = "error";
         res.message = e.what();
       }
     } else {
       res.status = "error";
-      res.message = "cannot build the scene: " + prob_error;
+      res.message = "cannot build the scene: " + error_;
     }
-    ++index;
     RunRecord rec = make_simulation_record(run_name(index, job.params.scene, job.solver), job.params, job.solver, res);
     rec.attrs["sweep_key"] = job.key;
-    rec.attrs["sweep_base"] = base;
-    rec.attrs["sweep_params"] = swept;
+    rec.attrs["sweep_base"] = base_;
+    rec.attrs["sweep_params"] = swept_;
     rec.attrs["sweep_point"] = job.point_text;
     rec.attrs["sweep_index"] = static_cast<long long>(job.index);
     rec.attrs["sweep_repeat"] = static_cast<long long>(job.repeat);
-    rec.attrs["sweep_spec"] = spec.path;
-    if (!spec.description.empty()) rec.attrs["sweep_description"] = spec.description;
-    rec.attrs["time_budget"] = spec.time_budget;
-    rec.attrs["reference"] = static_cast<long long>(spec.reference);
-    append_runs(out, {rec}, existing == 0 && index == 1);
-    finished[job.key] = rec.name;
-    ++done;
-    spent += clock.seconds();
-    ++timed;
-    if (!tty) {
-      std::ostringstream os;
-      os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
-         << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
-      std::cerr << os.str() << "\n";
-    }
-  }
-  if (tty) {
-    draw_bar(done, total, "done", -1);
-    std::cerr << "\n";
+    rec.attrs["sweep_spec"] = spec_.path;
+    if (!spec_.description.empty()) rec.attrs["sweep_description"] = spec_.description;
+    rec.attrs["time_budget"] = spec_.time_budget;
+    rec.attrs["reference"] = static_cast<long long>(spec_.reference);
+    return rec;
   }
 
-  // The summary: every run of this sweep, in sweep order, whether run now or before.
+ private:
+  const SweepSpec& spec_;
+  std::string base_, swept_;
+  RunOptions opt_;
+  std::unique_ptr<Problem> prob_;
+  int point_ = -1;
+  std::string error_;
+};
+
+// The summary: every run of this sweep, in sweep order, whether run now or before.
+void print_summary(const SweepSpec& spec, const std::vector<SweepJob>& jobs, const std::string& out) {
   std::map<std::string, RunRecord> by_key;
   if (std::filesystem::exists(out))
     for (auto& r : read_runs(out, false)) by_key[attr_cell(r, "sweep_key")] = std::move(r);
@@ -200,6 +165,63 @@ int cmd_sweep(const CommandArgs& argv) {
     rows.push_back(row);
   }
   print_table(rows);
+}
+
+}  // namespace
+
+int cmd_sweep(const CommandArgs& argv) {
+  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}}, 1);
+  if (args.positional().empty())
+    throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--time-budget S])");
+  const std::string out = args.require("--out");
+  // The whole spec and every combination are checked before anything runs.
+  SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"));
+  if (args.has("--time-budget")) {
+    spec.time_budget = args.get_double("--time-budget", 0);
+    if (spec.time_budget < 0) throw Error("sweep: --time-budget must be >= 0");
+  }
+  const std::vector<SweepJob> jobs = expand_sweep(spec);
+  const std::string base = sweep_base_hash(spec);
+  std::string swept;
+  for (const auto& [k, v] : spec.grid) swept += (swept.empty() ? "" : ",") + k;
+  int existing = 0;
+  auto finished = finished_runs(out, base, existing);  // resume: what is already in the file
+  int todo = 0;
+  for (const auto& j : jobs) todo += finished.count(j.key) ? 0 : 1;
+
+  const bool tty = isatty(STDERR_FILENO);
+  const int total = static_cast<int>(jobs.size());
+  std::cerr << "sweep: " << spec.path << ": " << total << " runs (" << (total - todo) << " already in " << out << ", "
+            << todo << " to do)\n";
+  JobRunner runner(spec, base, swept);
+  int done = total - todo, index = existing, timed = 0;
+  double spent = 0;
+  for (const auto& job : jobs) {
+    if (finished.count(job.key)) continue;
+    const std::string what = describe(job, spec.repeats);
+    const double eta = timed > 0 ? spent / timed * (total - done) : -1;
+    if (tty) draw_bar(done, total, what, eta);
+    else std::cerr << "sweep: [" << done + 1 << "/" << total << "] " << what << " ..." << std::flush;
+    Timer clock;
+    RunResult res;
+    const RunRecord rec = runner.run(job, ++index, res);
+    append_runs(out, {rec}, existing == 0 && index == 1);
+    finished[job.key] = rec.name;
+    ++done;
+    spent += clock.seconds();
+    ++timed;
+    if (!tty) {
+      std::ostringstream os;
+      os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
+         << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
+      std::cerr << os.str() << "\n";
+    }
+  }
+  if (tty) {
+    draw_bar(done, total, "done", -1);
+    std::cerr << "\n";
+  }
+  print_summary(spec, jobs, out);
   return 0;
 }
 
