@@ -118,6 +118,45 @@ std::vector<TomlEntry> entries_at_size(const std::string& path, const std::strin
 }
 }  // namespace
 
+namespace {
+// The fixed overrides (frames, [set]) and the grid axes, each value checked on its own so an
+// error names its line.
+void add_sets_and_grid(SweepSpec& spec, const std::string& frames, int frames_line,
+                       const std::vector<const TomlEntry*>& sets, const std::vector<const TomlEntry*>& grids) {
+  auto where = [&](const TomlEntry& e) { return spec.path + ":" + std::to_string(e.line); };
+  Params probe;
+  load_scene_file(spec.scene, probe);
+  if (!frames.empty()) {
+    set_param(probe, "frames", frames, spec.path + ":" + std::to_string(frames_line));
+    spec.sets.push_back("frames=" + frames);
+  }
+  for (const TomlEntry* e : sets) {
+    const std::string key = e->key.substr(4);
+    if (e->is_array)
+      throw Error(where(*e) + ": [set] '" + key + "' must be a single value (lists belong in [grid])");
+    set_param(probe, key, e->value, where(*e));
+    spec.sets.push_back(key + "=" + e->value);
+  }
+  std::set<std::string> fixed_keys;
+  for (const auto& kv : spec.sets) fixed_keys.insert(kv.substr(0, kv.find('=')));
+  for (const TomlEntry* e : grids) {
+    const std::string key = e->key.substr(5);
+    if (!e->is_array) throw Error(where(*e) + ": [grid] '" + key + "' must be a list of values");
+    if (e->items.empty()) throw Error(where(*e) + ": [grid] '" + key + "' is an empty list");
+    if (fixed_keys.count(key)) throw Error(where(*e) + ": '" + key + "' is both fixed ([set] or frames) and swept ([grid])");
+    if (key == "scene") throw Error(where(*e) + ": 'scene' cannot be swept (one sweep, one scene builder)");
+    std::set<std::string> seen;
+    for (const auto& v : e->items) {
+      Params q = probe;
+      set_param(q, key, v, where(*e));
+      if (!seen.insert(canonical_value(q, key)).second)
+        throw Error(where(*e) + ": [grid] '" + key + "' lists the value " + v + " twice");
+    }
+    spec.grid.emplace_back(key, e->items);
+  }
+}
+}  // namespace
+
 SweepSpec parse_sweep_spec(const std::string& path, const std::string& size) {
   SweepSpec spec;
   spec.path = path;
@@ -175,38 +214,7 @@ SweepSpec parse_sweep_spec(const std::string& path, const std::string& size) {
   }
   if (spec.scene.empty()) throw Error(path + ": missing 'scene' (a built-in scene name or a .toml file)");
   if (!have_solvers) throw Error(path + ": missing 'solvers' (a list of solver names)");
-
-  // Fixed overrides, each checked on its own so the error names its line.
-  Params probe;
-  load_scene_file(spec.scene, probe);
-  if (!frames.empty()) {
-    set_param(probe, "frames", frames, path + ":" + std::to_string(frames_line));
-    spec.sets.push_back("frames=" + frames);
-  }
-  for (const TomlEntry* e : sets) {
-    const std::string key = e->key.substr(4);
-    if (e->is_array)
-      throw Error(where(*e) + ": [set] '" + key + "' must be a single value (lists belong in [grid])");
-    set_param(probe, key, e->value, where(*e));
-    spec.sets.push_back(key + "=" + e->value);
-  }
-  std::set<std::string> fixed_keys;
-  for (const auto& kv : spec.sets) fixed_keys.insert(kv.substr(0, kv.find('=')));
-  for (const TomlEntry* e : grids) {
-    const std::string key = e->key.substr(5);
-    if (!e->is_array) throw Error(where(*e) + ": [grid] '" + key + "' must be a list of values");
-    if (e->items.empty()) throw Error(where(*e) + ": [grid] '" + key + "' is an empty list");
-    if (fixed_keys.count(key)) throw Error(where(*e) + ": '" + key + "' is both fixed ([set] or frames) and swept ([grid])");
-    if (key == "scene") throw Error(where(*e) + ": 'scene' cannot be swept (one sweep, one scene builder)");
-    std::set<std::string> seen;
-    for (const auto& v : e->items) {
-      Params q = probe;
-      set_param(q, key, v, where(*e));
-      if (!seen.insert(canonical_value(q, key)).second)
-        throw Error(where(*e) + ": [grid] '" + key + "' lists the value " + v + " twice");
-    }
-    spec.grid.emplace_back(key, e->items);
-  }
+  add_sets_and_grid(spec, frames, frames_line, sets, grids);
   return spec;
 }
 
