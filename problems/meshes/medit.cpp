@@ -9,6 +9,41 @@ namespace xb {
 
 using namespace mesh_text;
 
+namespace {
+// The Vertices section after its keyword: count, then x y z ref per vertex. Returns the count.
+long long read_vertices(Lines& L, size_t bytes, TetMesh& mesh, std::vector<int>& vline) {
+  const long long nv = parse_count(L.require_token("the number of vertices"), L.where(), "number of vertices", bytes);
+  mesh.vertices.resize(3, nv);
+  vline.resize(nv);
+  for (long long i = 0; i < nv; ++i) {
+    for (int c = 0; c < 3; ++c)
+      mesh.vertices(c, i) = parse_double(L.require_token("vertex " + std::to_string(i + 1) + " of " + std::to_string(nv)),
+                                         L.where(), "coordinate");
+    vline[i] = L.line();
+    (void)parse_int(L.require_token("a vertex reference"), L.where(), "vertex reference");
+  }
+  return nv;
+}
+
+// The Tetrahedra section after its keyword: count, then 4 one-based vertex indices and a ref.
+void read_tetrahedra(Lines& L, size_t bytes, long long nv, TetMesh& mesh, std::vector<int>& tline) {
+  const long long nt = parse_count(L.require_token("the number of tetrahedra"), L.where(), "number of tetrahedra", bytes);
+  mesh.tets.resize(nt);
+  tline.resize(nt);
+  for (long long t = 0; t < nt; ++t) {
+    for (int k = 0; k < 4; ++k) {
+      const long long v = parse_int(L.require_token("tetrahedron " + std::to_string(t + 1) + " of " + std::to_string(nt)),
+                                    L.where(), "vertex index");
+      if (v < 1 || v > nv)
+        throw Error(L.where() + ": vertex index " + std::to_string(v) + " out of range [1, " + std::to_string(nv) + "]");
+      mesh.tets[t][k] = static_cast<int>(v - 1);
+    }
+    tline[t] = L.line();
+    (void)parse_int(L.require_token("a tetrahedron reference"), L.where(), "tetrahedron reference");
+  }
+}
+}  // namespace
+
 TetMesh read_medit(const std::string& path, MeshReadReport* report) {
   Lines L(path, true);
   const size_t bytes = file_size(path);
@@ -38,34 +73,12 @@ TetMesh read_medit(const std::string& path, MeshReadReport* report) {
     } else if (tok == "Vertices") {
       if (have_v) throw Error(L.where() + ": a second Vertices section");
       have_v = true;
-      nv = parse_count(L.require_token("the number of vertices"), L.where(), "number of vertices", bytes);
-      mesh.vertices.resize(3, nv);
-      vline.resize(nv);
-      for (long long i = 0; i < nv; ++i) {
-        for (int c = 0; c < 3; ++c)
-          mesh.vertices(c, i) = parse_double(L.require_token("vertex " + std::to_string(i + 1) + " of " + std::to_string(nv)),
-                                             L.where(), "coordinate");
-        vline[i] = L.line();
-        (void)parse_int(L.require_token("a vertex reference"), L.where(), "vertex reference");
-      }
+      nv = read_vertices(L, bytes, mesh, vline);
     } else if (tok == "Tetrahedra") {
       if (have_t) throw Error(L.where() + ": a second Tetrahedra section");
       if (!have_v) throw Error(L.where() + ": Tetrahedra before Vertices");
       have_t = true;
-      const long long nt = parse_count(L.require_token("the number of tetrahedra"), L.where(), "number of tetrahedra", bytes);
-      mesh.tets.resize(nt);
-      tline.resize(nt);
-      for (long long t = 0; t < nt; ++t) {
-        for (int k = 0; k < 4; ++k) {
-          const long long v = parse_int(L.require_token("tetrahedron " + std::to_string(t + 1) + " of " + std::to_string(nt)),
-                                        L.where(), "vertex index");
-          if (v < 1 || v > nv)
-            throw Error(L.where() + ": vertex index " + std::to_string(v) + " out of range [1, " + std::to_string(nv) + "]");
-          mesh.tets[t][k] = static_cast<int>(v - 1);
-        }
-        tline[t] = L.line();
-        (void)parse_int(L.require_token("a tetrahedron reference"), L.where(), "tetrahedron reference");
-      }
+      read_tetrahedra(L, bytes, nv, mesh, tline);
     } else if (tok == "End") {
       ended = true;
     } else if (auto it = skip.find(tok); it != skip.end()) {
