@@ -1,6 +1,7 @@
 // Rank 0 drives, ranks > 0 serve: see distributed.hpp. Every command starts with a broadcast
 // header so all ranks enter the same collective calls in the same order.
 #include "distributed.hpp"
+#include "distributed_transport.hpp"
 
 #include "factories.hpp"
 #include "kernels.hpp"
@@ -9,14 +10,11 @@
 #include "../problems/error.hpp"
 #include "../problems/params.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <numeric>
-#include <sstream>
-#include <thread>
 
 namespace xb {
 
@@ -52,9 +50,12 @@ int mpi_size() {
   return s;
 }
 
-std::vector<long long> contiguous_rows(long long n, int nranks) {
+std::vector<long long> contiguous_rows(long long n, int nranks, int block_size) {
+  if (block_size < 1 || n % block_size)
+    throw Error(std::to_string(n) + " rows are not a whole number of blocks of " + std::to_string(block_size));
+  const long long nodes = n / block_size;
   std::vector<long long> off(nranks + 1);
-  for (int r = 0; r <= nranks; ++r) off[r] = n * r / nranks;
+  for (int r = 0; r <= nranks; ++r) off[r] = block_size * (nodes * r / nranks);
   return off;
 }
 
@@ -86,10 +87,6 @@ bool method_is_distributed(const std::string& name) { return name == "hypre" || 
 
 namespace {
 
-enum Cmd : long long { kCreate = 1, kSetup, kSolve, kDestroy, kQuit };
-// Header: {cmd, id, kind, frame, substep, iteration, values_only, n_global}
-using Header = long long[8];
-
 std::unique_ptr<DistributedKernel> make_kernel(const std::string& name, const Params& p) {
 #ifdef XB_WITH_HYPRE
   if (name == "hypre") return make_hypre_kernel(p);
@@ -101,107 +98,6 @@ std::unique_ptr<DistributedKernel> make_kernel(const std::string& name, const Pa
   throw Error("solver '" + name + "' has no distributed kernel in this build");
 }
 
-// Every command header goes through this non-blocking broadcast (blocking and non-blocking
-// collectives must not be mixed). Waiting ranks sleep between tests instead of spinning.
-void bcast_header(Header& h) {
-  MPI_Request req;
-  MPI_Ibcast(h, 8, MPI_LONG_LONG, 0, MPI_COMM_WORLD, &req);
-  for (int done = 0;;) {
-    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
-    if (done) break;
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
-  }
-}
-
-void bcast_string(std::string& s) {
-  long long len = static_cast<long long>(s.size());
-  MPI_Bcast(&len, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
-  s.resize(len);
-  if (len) MPI_Bcast(s.data(), static_cast<int>(len), MPI_CHAR, 0, MPI_COMM_WORLD);
-}
-
-// Params as "key=value" lines through the one field table (so workers see exactly rank 0's).
-std::string serialize(const Params& p) {
-  std::string s;
-  for (const auto& f : param_fields()) s += f.key + "=" + param_to_string(p, f) + "\n";
-  return s;
-}
-
-Params deserialize(const std::string& text) {
-  Params p;
-  std::istringstream is(text);
-  for (std::string line; std::getline(is, line);) {
-    const auto eq = line.find('=');
-    if (eq != std::string::npos) set_param(p, line.substr(0, eq), line.substr(eq + 1), "mpi");
-  }
-  return p;
-}
-
-// Rank r's rows of A (global column indices).
-void extract_block(const SparseMatrix& A, long long first, long long last, RowBlock& blk, bool values_only) {
-  const int* op = A.outerIndexPtr();
-  const int* ii = A.innerIndexPtr();
-  const double* vv = A.valuePtr();
-  const long long b0 = op[first], b1 = op[last];
-  blk.n_global = A.rows();
-  blk.first = first;
-  blk.vals.assign(vv + b0, vv + b1);
-  if (values_only) return;
-  blk.rowptr.resize(last - first + 1);
-  for (long long i = first; i <= last; ++i) blk.rowptr[i - first] = static_cast<int>(op[i] - b0);
-  blk.cols.assign(ii + b0, ii + b1);
-}
-
-template <class T>
-MPI_Datatype mpi_type();
-template <>
-MPI_Datatype mpi_type<int>() { return MPI_INT; }
-template <>
-MPI_Datatype mpi_type<long long>() { return MPI_LONG_LONG; }
-template <>
-MPI_Datatype mpi_type<double>() { return MPI_DOUBLE; }
-
-template <class T>
-void send_vec(const std::vector<T>& v, int to) {
-  long long n = static_cast<long long>(v.size());
-  MPI_Send(&n, 1, MPI_LONG_LONG, to, 0, MPI_COMM_WORLD);
-  if (n) MPI_Send(v.data(), static_cast<int>(n), mpi_type<T>(), to, 0, MPI_COMM_WORLD);
-}
-
-template <class T>
-void recv_vec(std::vector<T>& v) {
-  long long n = 0;
-  MPI_Recv(&n, 1, MPI_LONG_LONG, 0, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  v.resize(n);
-  if (n) MPI_Recv(v.data(), static_cast<int>(n), mpi_type<T>(), 0, 0, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-}
-
-// b (rank 0, whole) -> each rank's block; and back for x.
-void scatter_vector(const double* full, long long n, std::vector<double>& local) {
-  const int np = mpi_size(), rank = mpi_rank();
-  const auto off = contiguous_rows(n, np);
-  std::vector<int> counts(np), displs(np);
-  for (int r = 0; r < np; ++r) {
-    counts[r] = static_cast<int>(off[r + 1] - off[r]);
-    displs[r] = static_cast<int>(off[r]);
-  }
-  local.resize(counts[rank]);
-  MPI_Scatterv(full, counts.data(), displs.data(), MPI_DOUBLE, local.data(), counts[rank], MPI_DOUBLE, 0,
-               MPI_COMM_WORLD);
-}
-
-void gather_vector(const std::vector<double>& local, long long n, double* full) {
-  const int np = mpi_size();
-  const auto off = contiguous_rows(n, np);
-  std::vector<int> counts(np), displs(np);
-  for (int r = 0; r < np; ++r) {
-    counts[r] = static_cast<int>(off[r + 1] - off[r]);
-    displs[r] = static_cast<int>(off[r]);
-  }
-  MPI_Gatherv(local.data(), static_cast<int>(local.size()), MPI_DOUBLE, full, counts.data(), displs.data(), MPI_DOUBLE,
-              0, MPI_COMM_WORLD);
-}
-
 long long g_next_id = 1;
 
 class DistributedSolver final : public LinearSolver {
@@ -209,9 +105,11 @@ class DistributedSolver final : public LinearSolver {
   DistributedSolver(const std::string& name, const Params& p) : name_(name), tol_(p.linear_tol) {
     id_ = g_next_id++;
     if (mpi_size() > 1) {
-      Header h = {kCreate, id_, 0, 0, 0, 0, 0, 0};
+      Header h;
+      h.cmd = kCreate;
+      h.id = id_;
       bcast_header(h);
-      std::string n = name, text = serialize(p);
+      std::string n = name, text = serialize_params(p);
       bcast_string(n);
       bcast_string(text);
     }
@@ -219,7 +117,9 @@ class DistributedSolver final : public LinearSolver {
   }
   ~DistributedSolver() override {
     if (mpi_size() > 1) {
-      Header h = {kDestroy, id_, 0, 0, 0, 0, 0, 0};
+      Header h;
+      h.cmd = kDestroy;
+      h.id = id_;
       bcast_header(h);
     }
   }
@@ -227,30 +127,43 @@ class DistributedSolver final : public LinearSolver {
 
   void setup(const SparseMatrix& A, SetupKind kind, const SetupContext& ctx) override {
     if (!A.isCompressed()) throw Error(name_ + ": the matrix must be in compressed CSR form");
+    const Eigen::MatrixXd* nk = ctx.near_kernel;
+    if (nk && nk->rows() != A.rows())
+      throw Error(name_ + ": near-kernel basis has " + std::to_string(nk->rows()) + " rows, the matrix " +
+                  std::to_string(A.rows()));
     Timer t;
-    A_ = &A;
     const int np = mpi_size();
+    const auto off = contiguous_rows(A.rows(), np, ctx.block_size);  // throws for a partial block
+    A_ = &A;
     // Only values travel when the pattern is known to be the same as last time.
-    const bool values_only = kind == SetupKind::Values && A.rows() == n_ && A.nonZeros() == nnz_;
+    const bool values_only =
+        kind == SetupKind::Values && A.rows() == n_ && A.nonZeros() == nnz_ && ctx.block_size == block_size_;
     n_ = A.rows();
     nnz_ = A.nonZeros();
-    const auto off = contiguous_rows(n_, np);
+    block_size_ = ctx.block_size;
     if (np > 1) {
-      Header h = {kSetup, id_, kind == SetupKind::Values ? 1 : 0, ctx.frame, ctx.substep, ctx.iteration,
-                  values_only ? 1 : 0, n_};
+      Header h;
+      h.cmd = kSetup;
+      h.id = id_;
+      h.values = kind == SetupKind::Values;
+      h.frame = ctx.frame;
+      h.substep = ctx.substep;
+      h.iteration = ctx.iteration;
+      h.values_only = values_only;
+      h.n_global = n_;
+      h.block_size = block_size_;
+      h.near_kernel_cols = nk ? nk->cols() : 0;
       bcast_header(h);
       RowBlock other;
       for (int r = 1; r < np; ++r) {
-        extract_block(A, off[r], off[r + 1], other, values_only);
-        if (!values_only) {
-          send_vec(other.rowptr, r);
-          send_vec(other.cols, r);
-        }
-        send_vec(other.vals, r);
+        extract_block(A, nk, off[r], off[r + 1], block_size_, other, values_only);
+        send_block(other, r, values_only);
       }
     }
-    extract_block(A, off[0], off[1], block_, values_only);
-    kernel_->setup(block_, kind, ctx);
+    extract_block(A, nk, off[0], off[1], block_size_, block_, values_only);
+    SetupContext local = ctx;  // as on the workers: the near-kernel rows of this block
+    local.near_kernel = nk ? &block_.near_kernel : nullptr;
+    kernel_->setup(block_, kind, local);
     setup_time_ = t.seconds();
   }
 
@@ -259,15 +172,19 @@ class DistributedSolver final : public LinearSolver {
     Timer t;
     std::vector<double> bl, xl;
     if (mpi_size() > 1) {
-      Header h = {kSolve, id_, 0, 0, 0, 0, 0, n_};
+      Header h;
+      h.cmd = kSolve;
+      h.id = id_;
+      h.n_global = n_;
+      h.block_size = block_size_;
       bcast_header(h);
-      scatter_vector(b.data(), n_, bl);
+      scatter_vector(b.data(), n_, block_size_, bl);
     } else {
       bl.assign(b.data(), b.data() + b.size());
     }
     LinearStats st = kernel_->solve(bl, xl);
     x.resize(n_);
-    if (mpi_size() > 1) gather_vector(xl, n_, x.data());
+    if (mpi_size() > 1) gather_vector(xl, n_, block_size_, x.data());
     else std::copy(xl.begin(), xl.end(), x.data());
     st.solve_time = t.seconds();
     st.setup_time = setup_time_;
@@ -302,6 +219,7 @@ class DistributedSolver final : public LinearSolver {
   std::unique_ptr<DistributedKernel> kernel_;
   const SparseMatrix* A_ = nullptr;
   long long n_ = -1, nnz_ = -1;
+  int block_size_ = 1;
   RowBlock block_;
   double setup_time_ = 0;
 };
@@ -325,35 +243,34 @@ int serve_workers() {
       // Wait for rank 0 without spinning: between solves rank 0 assembles with OpenMP on the
       // same cores, and a busy-polling MPI_Bcast would steal them.
       bcast_header(h);
-      const long long id = h[1];
-      switch (h[0]) {
+      const long long id = h.id;
+      switch (h.cmd) {
         case kCreate: {
           std::string name, text;
           bcast_string(name);
           bcast_string(text);
-          kernels[id] = make_kernel(name, deserialize(text));
+          kernels[id] = make_kernel(name, deserialize_params(text));
           break;
         }
         case kSetup: {
           RowBlock& blk = blocks[id];
-          const auto off = contiguous_rows(h[7], mpi_size());
-          blk.n_global = h[7];
-          blk.first = off[mpi_rank()];
-          if (!h[6]) {
-            recv_vec(blk.rowptr);
-            recv_vec(blk.cols);
-          }
-          recv_vec(blk.vals);
-          const SetupKind kind = h[2] ? SetupKind::Values : SetupKind::Structure;
-          kernels.at(id)->setup(blk, kind, SetupContext{static_cast<int>(h[3]), static_cast<int>(h[4]),
-                                                        static_cast<int>(h[5])});
+          const int bs = static_cast<int>(h.block_size);
+          blk.n_global = h.n_global;
+          blk.first = contiguous_rows(h.n_global, mpi_size(), bs)[mpi_rank()];
+          blk.block_size = bs;
+          recv_block(blk, h.values_only, h.near_kernel_cols);
+          SetupContext ctx{static_cast<int>(h.frame), static_cast<int>(h.substep), static_cast<int>(h.iteration)};
+          ctx.block_size = bs;
+          ctx.near_kernel = h.near_kernel_cols ? &blk.near_kernel : nullptr;  // this rank's rows only
+          kernels.at(id)->setup(blk, h.values ? SetupKind::Values : SetupKind::Structure, ctx);
           break;
         }
         case kSolve: {
           std::vector<double> bl, xl;
-          scatter_vector(nullptr, h[7], bl);
+          const int bs = static_cast<int>(h.block_size);
+          scatter_vector(nullptr, h.n_global, bs, bl);
           kernels.at(id)->solve(bl, xl);
-          gather_vector(xl, h[7], nullptr);
+          gather_vector(xl, h.n_global, bs, nullptr);
           break;
         }
         case kDestroy:
@@ -363,7 +280,7 @@ int serve_workers() {
         case kQuit:
           return 0;
         default:
-          throw Error("unknown MPI command " + std::to_string(h[0]));
+          throw Error("unknown MPI command " + std::to_string(h.cmd));
       }
     }
   } catch (const std::exception& e) {
@@ -377,7 +294,8 @@ int serve_workers() {
 void stop_workers() {
   if (g_workers_stopped || mpi_rank() != 0 || mpi_size() == 1) return;
   g_workers_stopped = true;
-  Header h = {kQuit, 0, 0, 0, 0, 0, 0, 0};
+  Header h;
+  h.cmd = kQuit;
   bcast_header(h);
 }
 

@@ -5,6 +5,9 @@
 // per rank, broadcasts a command (create / setup / solve / destroy) and scatters the blocks;
 // ranks > 0 sit in serve_workers() and run the same DistributedKernel code on their block.
 // With one process nothing is sent: the kernel gets the whole matrix.
+// Block systems (the primal form, SetupContext::block_size = 3): blocks are split at multiples of
+// the block size, so a node's rows stay on one rank, and the block size and this rank's rows of
+// the near-kernel basis travel with the setup command (RowBlock::block_size, ::near_kernel).
 #pragma once
 
 #include "linear_solver.hpp"
@@ -22,15 +25,20 @@ int mpi_rank();
 int mpi_size();
 
 // First row of each rank's block: offsets[r] .. offsets[r+1]-1 (offsets.size() = nranks + 1).
-std::vector<long long> contiguous_rows(long long n, int nranks);
+// Every offset is a multiple of block_size (n must be one too): nodes ⌊N·r/P⌋ … of N = n/block_size.
+std::vector<long long> contiguous_rows(long long n, int nranks, int block_size = 1);
 
 // Rows [first, first + rows()) of an n_global × n_global matrix, CSR with global column indices.
+// A kernel takes the block size and the near-kernel from here, not from its SetupContext (whose
+// near_kernel, on rank 0, has all n rows).
 struct RowBlock {
   long long n_global = 0;
   long long first = 0;
   std::vector<int> rowptr{0};
   std::vector<long long> cols;
   std::vector<double> vals;
+  int block_size = 1;          // unknowns per node, node-major; first and rows() are multiples
+  Eigen::MatrixXd near_kernel;  // this block's rows of the n × k near-kernel basis (0 columns: none)
   int rows() const { return static_cast<int>(rowptr.size()) - 1; }
 };
 
@@ -69,10 +77,11 @@ bool method_is_distributed(const std::string& name);
 std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p);
 std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p);
 
-// The library options a Params maps to (for tests and the README table): BoomerAMG's integer
-// codes ("coarsen_type", "interp_type", "relax_type", ...) and MueLu's parameter list as text.
-std::map<std::string, double> hypre_options(const Params& p);
-std::string muelu_parameter_text(const Params& p);
+// The library options a Params maps to for a system with `block_size` unknowns per node (for
+// tests and the README table): BoomerAMG's integer codes ("coarsen_type", "interp_type",
+// "relax_type", "num_functions", "nodal", ...) and MueLu's parameter list as text.
+std::map<std::string, double> hypre_options(const Params& p, int block_size = 1);
+std::string muelu_parameter_text(const Params& p, int block_size = 1);
 
 // Rank 0: a LinearSolver that drives the kernel `name` on all ranks.
 std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, const Params& p);

@@ -13,7 +13,18 @@
 // the last hierarchy as the preconditioner of the new matrix (PCG and the finest-level smoother
 // use the new A; coarse levels, interpolation and smoother weights are stale) until a Structure
 // setup or amg.setup_interval frames have passed ("reuse-hierarchy").
+// Block systems (the primal K, block_size 3): BoomerAMG's systems AMG with num_functions = 3
+// (hypre's default dof map i mod 3 is our node-major order; row blocks split at multiples of 3).
+// Measured on K of cloth_hang r64/r128 and bar_hang r8/r12 (docs/external_solvers.md):
+//  - coarsening per function (SetNodal 0) needed the fewest iterations (cloth128: 19 per solve
+//    against 21-23 for nodal norms 1, 2, 4, 6) and the lowest operator complexity on the bar
+//    (1.14 against 1.74); nodal coarsening is therefore off (the "nodal" option, 0).
+//  - rigid-mode interpolation vectors (SetInterpVectors with the 3 rotations) are not used: GM-2
+//    raised cloth's operator complexity from 1.9 to 5.9 for the same iterations and its setup
+//    failed on the bar (error 12, a bad argument inside hypre), GM-1 made PCG break down on
+//    cloth, LN aborted in the setup; both need nodal coarsening, which costs iterations here.
 #include "distributed.hpp"
+#include "setup_policy.hpp"
 #include "timer.hpp"
 
 #include "../problems/error.hpp"
@@ -84,7 +95,7 @@ HYPRE_Int no_setup(HYPRE_Solver, HYPRE_ParCSRMatrix, HYPRE_ParVector, HYPRE_ParV
 
 class HypreKernel final : public DistributedKernel {
  public:
-  explicit HypreKernel(const Params& p) : p_(p) {
+  explicit HypreKernel(const Params& p) : p_(p), policy_(p.amg_setup_interval) {
     static std::once_flag once;
     std::call_once(once, [] { HYPRE_Init(); });
     // Validate the choices now (on every rank), not at the first setup.
@@ -108,8 +119,7 @@ class HypreKernel final : public DistributedKernel {
     const HYPRE_BigInt hi = static_cast<HYPRE_BigInt>(blk.first + blk.rows() - 1);
     n_local_ = blk.rows();
     destroy_pcg();  // it refers to the previous matrix
-    const bool rebuild = kind == SetupKind::Structure || !amg_ || p_.hypre_reuse == "none" ||
-                         ctx.frame >= built_frame_ + p_.amg_setup_interval || ctx.frame < built_frame_;
+    const bool rebuild = p_.hypre_reuse == "none" || policy_.rebuild(kind, ctx, amg_ != nullptr);
     // The matrix the hierarchy was built from stays alive while the hierarchy is in use.
     if (ij_ && ij_ != ij_amg_) destroy_matrix(ij_);
     ij_ = nullptr;
@@ -145,8 +155,8 @@ class HypreKernel final : public DistributedKernel {
       destroy_amg();
       if (ij_amg_ && ij_amg_ != ij_) destroy_matrix(ij_amg_);
       ij_amg_ = ij_;
-      build_amg();
-      built_frame_ = ctx.frame;
+      build_amg(blk);
+      policy_.rebuilt(ctx);
       record_setup(kind == SetupKind::Structure ? "structure" : "values", true);
     } else {
       record_setup("reuse-hierarchy", false);
@@ -219,13 +229,13 @@ class HypreKernel final : public DistributedKernel {
   }
 
  private:
-  void build_amg() {
+  void build_amg(const RowBlock& blk) {
     HYPRE_BoomerAMGCreate(&amg_);
     HYPRE_BoomerAMGSetPrintLevel(amg_, 0);
     HYPRE_BoomerAMGSetMaxIter(amg_, 1);  // one V-cycle per application
     HYPRE_BoomerAMGSetTol(amg_, 0.0);
     // The options come from the one mapping table (hypre_options) that the tests check.
-    const auto o = hypre_options(p_);
+    const auto o = hypre_options(p_, blk.block_size);
     auto opt = [&](const char* k) { return static_cast<HYPRE_Int>(o.at(k)); };
     HYPRE_BoomerAMGSetCoarsenType(amg_, opt("coarsen_type"));
     HYPRE_BoomerAMGSetInterpType(amg_, opt("interp_type"));
@@ -235,8 +245,17 @@ class HypreKernel final : public DistributedKernel {
     HYPRE_BoomerAMGSetStrongThreshold(amg_, o.at("strong_threshold"));
     HYPRE_BoomerAMGSetAggNumLevels(amg_, opt("agg_num_levels"));
     HYPRE_BoomerAMGSetMaxLevels(amg_, opt("max_levels"));
+    if (opt("num_functions") > 1) {
+      // Systems AMG: dof i belongs to function i mod block_size (hypre's default map, node-major).
+      HYPRE_BoomerAMGSetNumFunctions(amg_, opt("num_functions"));
+      HYPRE_BoomerAMGSetNodal(amg_, opt("nodal"));
+    }
     check(HYPRE_BoomerAMGSetup(amg_, A_, b_, x_), "BoomerAMGSetup");
-    // Complexities (collective: every rank computes them, rank 0 reports).
+    record_hierarchy();
+  }
+
+  // Complexities (collective: every rank computes them, rank 0 reports).
+  void record_hierarchy() {
     auto* data = reinterpret_cast<hypre_ParAMGData*>(amg_);
     const int nl = hypre_ParAMGDataNumLevels(data);
     hypre_ParCSRMatrix** As = hypre_ParAMGDataAArray(data);
@@ -292,12 +311,12 @@ class HypreKernel final : public DistributedKernel {
   HYPRE_ParVector b_ = nullptr, x_ = nullptr;
   HYPRE_Solver amg_ = nullptr, pcg_ = nullptr;
   LoggedAmg logged_;
-  int built_frame_ = 0;
+  SetupPolicy policy_;
 };
 
 }  // namespace
 
-std::map<std::string, double> hypre_options(const Params& p) {
+std::map<std::string, double> hypre_options(const Params& p, int block_size) {
   return {{"coarsen_type", coarsen_type(p.hypre_coarsening)},
           {"interp_type", interp_type(p.hypre_interpolation)},
           {"relax_type", relax_type(p.hypre_relaxation)},
@@ -306,7 +325,9 @@ std::map<std::string, double> hypre_options(const Params& p) {
           {"agg_num_levels", p.hypre_aggressive_levels},
           {"max_levels", p.hypre_max_levels},
           {"num_sweeps", 1},
-          {"pcg_two_norm", 1}};
+          {"pcg_two_norm", 1},
+          {"num_functions", block_size},
+          {"nodal", 0}};  // see the file comment
 }
 
 std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p) { return std::make_unique<HypreKernel>(p); }

@@ -15,6 +15,7 @@
 // tP keeps the tentative prolongator and redoes the rest ("reuse-tP"). muelu.reuse = none rebuilds
 // on every setup.
 #include "distributed.hpp"
+#include "setup_policy.hpp"
 #include "timer.hpp"
 
 #include "../problems/error.hpp"
@@ -55,6 +56,9 @@ using Teuchos::RCP;
 using Teuchos::rcp;
 
 bool g_tpetra_started = false;
+
+// Aggregation drop tolerances on block systems (see make_parameters).
+constexpr double kBlockDropTol = 0.05, kBlockCoarseDropTol = 0.01;
 
 void ensure_tpetra() {
   if (Tpetra::isInitialized()) return;
@@ -104,26 +108,42 @@ class HistoryTest final : public Belos::StatusTest<SC, MV, OP> {
 
 class MueLuKernel final : public DistributedKernel {
  public:
-  explicit MueLuKernel(const Params& p) : p_(p) {
+  explicit MueLuKernel(const Params& p) : p_(p), policy_(p.amg_setup_interval) {
     ensure_tpetra();
     comm_ = rcp(new Teuchos::MpiComm<int>(MPI_COMM_WORLD));
-    params_ = make_parameters(p);
+    make_parameters(p, 1);  // rejects bad choices now, on every rank
   }
 
-  // The harness keys → MueLu parameter names (see README).
-  static Teuchos::ParameterList make_parameters(const Params& p) {
+  // The harness keys → MueLu parameter names (see README), for `block_size` unknowns per node.
+  static Teuchos::ParameterList make_parameters(const Params& p, int block_size) {
     Teuchos::ParameterList L;
     L.set("verbosity", "none");
     L.set("problem: symmetric", true);
-    L.set("number of equations", 1);
+    // Nodes of block_size rows: aggregation on the amalgamated (node) graph, and with the rigid
+    // modes as "Nullspace" (user data, set in setup) a tentative P per aggregate from its QR.
+    L.set("number of equations", block_size);
     L.set("max levels", p.amg_max_levels);
     L.set("coarse: max size", p.muelu_coarse_size);
     L.set("coarse: type", "KLU2");
-    if (p.muelu_algorithm != "sa" && p.muelu_algorithm != "unsmoothed")
-      throw Error("muelu.algorithm: unknown '" + p.muelu_algorithm + "' (valid: unsmoothed, sa)");
-    L.set("multigrid algorithm", p.muelu_algorithm);
+    const std::string& a = p.muelu_algorithm;
+    if (a != "auto" && a != "sa" && a != "unsmoothed")
+      throw Error("muelu.algorithm: unknown '" + a + "' (valid: auto, unsmoothed, sa)");
+    L.set("multigrid algorithm", a != "auto" ? a : block_size > 1 ? "sa" : "unsmoothed");
     L.set("aggregation: type", "uncoupled");
-    L.set("aggregation: drop tol", p.amg_strength_threshold);
+    if (block_size == 1) {
+      L.set("aggregation: drop tol", p.amg_strength_threshold);
+    } else {
+      // K (measured on cloth_hang and bar_hang): the dual's 0.25 cut cloth's couplings so that
+      // CG needed 6-8x the iterations, and no dropping left bar_hang at 4x. 0.05 on the fine
+      // level with 0.01 below gave the fewest iterations on both. A node whose couplings are all
+      // dropped is kept as its own aggregate ("preserve Dirichlet points"); MueLu otherwise
+      // leaves it out of every aggregate, and on the bar a whole coarse level was left out, so
+      // the coarsest matrix was singular (KLU2: numeric factorization failed).
+      L.set("aggregation: drop tol", kBlockDropTol);
+      for (int l = 2; l < p.amg_max_levels; ++l)  // "level l" builds level l from level l − 1
+        L.sublist("level " + std::to_string(l)).set("aggregation: drop tol", kBlockCoarseDropTol);
+      L.set("aggregation: preserve Dirichlet points", true);
+    }
     // Amesos2's KLU2 on a matrix spread over several ranks returned wrong solutions here
     // (Trilinos 13.2: ‖M⁻¹Av − v‖ ≈ 400‖v‖ for a one-level hierarchy on 2 ranks, and CG stalled at
     // 1000 iterations with two levels). Under MPI, a level with fewer than coarse-size rows per
@@ -141,6 +161,11 @@ class MueLuKernel final : public DistributedKernel {
     if (p.muelu_reuse != "none" && p.muelu_reuse != "tP" && p.muelu_reuse != "RP")
       throw Error("muelu.reuse: unknown '" + p.muelu_reuse + "' (valid: none, tP, RP)");
     L.set("reuse: type", p.muelu_reuse);
+    set_smoother(L, p);
+    return L;
+  }
+
+  static void set_smoother(Teuchos::ParameterList& L, const Params& p) {
     const std::string& s = p.muelu_smoother;
     if (s == "chebyshev") {
       L.set("smoother: type", "CHEBYSHEV");
@@ -169,61 +194,19 @@ class MueLuKernel final : public DistributedKernel {
     } else {
       throw Error("muelu.smoother: unknown '" + s + "' (valid: chebyshev, jacobi, gs, sgs)");
     }
-    return L;
   }
 
   void setup(const RowBlock& blk, SetupKind kind, const SetupContext& ctx) override {
     const bool same_pattern = kind == SetupKind::Values && A_ && blk.n_global == n_global_ &&
-                              blk.first == first_ && blk.rows() == static_cast<int>(A_->getNodeNumRows());
-    if (same_pattern) {
-      A_->resumeFill();
-      for (int i = 0; i < blk.rows(); ++i) {
-        const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
-        A_->replaceGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
-                                Teuchos::ArrayView<const SC>(&blk.vals[b], e - b));
-      }
-      A_->fillComplete();
-    } else {
-      n_global_ = blk.n_global;
-      first_ = blk.first;
-      map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(blk.n_global), static_cast<size_t>(blk.rows()), 0, comm_));
-      std::vector<size_t> per_row(blk.rows());
-      for (int i = 0; i < blk.rows(); ++i) per_row[i] = blk.rowptr[i + 1] - blk.rowptr[i];
-      // Tpetra builds the column map (own columns first, in row-map order): MueLu's uncoupled
-      // aggregation assumes a row's local index is also its local column index. A column map
-      // sorted by global index broke that on ranks > 0 (TentativePFactory: "fine level NS part
-      // has a zero column" on a 49K-row cloth system, 2 ranks).
-      A_ = rcp(new CrsMatrix(map_, Teuchos::ArrayView<const size_t>(per_row.data(), per_row.size())));
-      for (int i = 0; i < blk.rows(); ++i) {
-        const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
-        A_->insertGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
-                               Teuchos::ArrayView<const SC>(&blk.vals[b], e - b));
-      }
-      A_->fillComplete(map_, map_);
-    }
-    const bool rebuild = !same_pattern || !prec_ || p_.muelu_reuse == "none" ||
-                         ctx.frame >= built_frame_ + p_.amg_setup_interval || ctx.frame < built_frame_;
+                              blk.first == first_ && blk.rows() == static_cast<int>(A_->getNodeNumRows()) &&
+                              blk.block_size == block_size_;
+    if (same_pattern) refill_matrix(blk);
+    else build_matrix(blk);
+    const bool rebuild = p_.muelu_reuse == "none" ||
+                         policy_.rebuild(same_pattern ? SetupKind::Values : SetupKind::Structure, ctx, !prec_.is_null());
     if (rebuild) {
-      Teuchos::ParameterList L = params_;
-      if (comm_->getSize() > 1) {
-        // The partitioner wants coordinates: the global row index (1D) keeps parts contiguous.
-        auto coords = rcp(new Tpetra::MultiVector<double, LO, GO, NO>(map_, 1));
-        auto c = coords->getDataNonConst(0);
-        for (int i = 0; i < blk.rows(); ++i) c[i] = static_cast<double>(blk.first + i);
-        c = Teuchos::null;
-        L.sublist("user data").set("Coordinates", coords);
-        // A one-level hierarchy would leave the direct solve spread over the ranks: keep at
-        // least two levels so the coarse one is moved onto a single rank.
-        if (blk.n_global <= p_.muelu_coarse_size)
-          L.set("coarse: max size", static_cast<int>(std::max<long long>(1, blk.n_global / 4)));
-      }
-      try {
-        prec_ = MueLu::CreateTpetraPreconditioner(RCP<OP>(A_), L);
-      } catch (const std::exception& e) {
-        prec_ = Teuchos::null;
-        throw Error("muelu setup: " + last_line(e.what()));
-      }
-      built_frame_ = ctx.frame;
+      build_hierarchy(blk);
+      policy_.rebuilt(ctx);
       record_setup(kind == SetupKind::Structure ? "structure" : "values", true);
     } else {
       MueLu::ReuseTpetraPreconditioner(A_, *prec_);
@@ -284,6 +267,73 @@ class MueLuKernel final : public DistributedKernel {
   }
 
  private:
+  void refill_matrix(const RowBlock& blk) {
+    A_->resumeFill();
+    for (int i = 0; i < blk.rows(); ++i) {
+      const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
+      A_->replaceGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
+                              Teuchos::ArrayView<const SC>(&blk.vals[b], e - b));
+    }
+    A_->fillComplete();
+  }
+
+  void build_matrix(const RowBlock& blk) {
+    n_global_ = blk.n_global;
+    first_ = blk.first;
+    block_size_ = blk.block_size;
+    map_ = rcp(new Map(static_cast<Tpetra::global_size_t>(blk.n_global), static_cast<size_t>(blk.rows()), 0, comm_));
+    std::vector<size_t> per_row(blk.rows());
+    for (int i = 0; i < blk.rows(); ++i) per_row[i] = blk.rowptr[i + 1] - blk.rowptr[i];
+    // Tpetra builds the column map (own columns first, in row-map order): MueLu's uncoupled
+    // aggregation assumes a row's local index is also its local column index. A column map
+    // sorted by global index broke that on ranks > 0 (TentativePFactory: "fine level NS part
+    // has a zero column" on a 49K-row cloth system, 2 ranks).
+    A_ = rcp(new CrsMatrix(map_, Teuchos::ArrayView<const size_t>(per_row.data(), per_row.size())));
+    for (int i = 0; i < blk.rows(); ++i) {
+      const int b = blk.rowptr[i], e = blk.rowptr[i + 1];
+      A_->insertGlobalValues(static_cast<GO>(blk.first + i), Teuchos::ArrayView<const GO>(&blk.cols[b], e - b),
+                             Teuchos::ArrayView<const SC>(&blk.vals[b], e - b));
+    }
+    A_->fillComplete(map_, map_);
+  }
+
+  void build_hierarchy(const RowBlock& blk) {
+    Teuchos::ParameterList L = make_parameters(p_, blk.block_size);
+    auto& user = L.sublist("user data");
+    if (blk.near_kernel.cols() > 0) {
+      // The near-kernel basis (the rigid modes on K) replaces MueLu's default (one constant per
+      // equation): aggregates' tentative P then interpolates rotations too.
+      auto ns = rcp(new MV(map_, static_cast<size_t>(blk.near_kernel.cols())));
+      for (int c = 0; c < blk.near_kernel.cols(); ++c) {
+        auto col = ns->getDataNonConst(c);
+        for (int i = 0; i < blk.rows(); ++i) col[i] = blk.near_kernel(i, c);
+      }
+      user.set("Nullspace", ns);
+    }
+    if (comm_->getSize() > 1) {
+      // The partitioner wants coordinates, one per node: the global node index (1D) keeps parts
+      // contiguous.
+      const int bs = blk.block_size;
+      auto node_map = rcp(new Map(static_cast<Tpetra::global_size_t>(blk.n_global / bs),
+                                  static_cast<size_t>(blk.rows() / bs), 0, comm_));
+      auto coords = rcp(new Tpetra::MultiVector<double, LO, GO, NO>(node_map, 1));
+      auto c = coords->getDataNonConst(0);
+      for (int i = 0; i < blk.rows() / bs; ++i) c[i] = static_cast<double>(blk.first / bs + i);
+      c = Teuchos::null;
+      user.set("Coordinates", coords);
+      // A one-level hierarchy would leave the direct solve spread over the ranks: keep at
+      // least two levels so the coarse one is moved onto a single rank.
+      if (blk.n_global <= p_.muelu_coarse_size)
+        L.set("coarse: max size", static_cast<int>(std::max<long long>(1, blk.n_global / 4)));
+    }
+    try {
+      prec_ = MueLu::CreateTpetraPreconditioner(RCP<OP>(A_), L);
+    } catch (const std::exception& e) {
+      prec_ = Teuchos::null;
+      throw Error("muelu setup: " + last_line(e.what()));
+    }
+  }
+
   void collect_statistics() {
     auto H = prec_->GetHierarchy();
     const int nl = H->GetNumLevels();
@@ -306,13 +356,13 @@ class MueLuKernel final : public DistributedKernel {
   }
 
   Params p_;
-  Teuchos::ParameterList params_;
   RCP<const Teuchos::Comm<int>> comm_;
   RCP<const Map> map_;
   RCP<CrsMatrix> A_;
   RCP<Prec> prec_;
   long long n_global_ = -1, first_ = -1;
-  int built_frame_ = 0;
+  int block_size_ = 1;
+  SetupPolicy policy_;
 };
 
 }  // namespace
@@ -320,9 +370,9 @@ class MueLuKernel final : public DistributedKernel {
 std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p) { return std::make_unique<MueLuKernel>(p); }
 
 // The MueLu parameter list a Params gives, as text (for tests and the README).
-std::string muelu_parameter_text(const Params& p) {
+std::string muelu_parameter_text(const Params& p, int block_size) {
   std::ostringstream os;
-  MueLuKernel::make_parameters(p).print(os);
+  MueLuKernel::make_parameters(p, block_size).print(os);
   return os.str();
 }
 

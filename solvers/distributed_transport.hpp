@@ -1,0 +1,44 @@
+// The messages between rank 0 and the worker ranks of the distributed solvers (internal to
+// distributed.cpp): command headers, Params, row blocks with their near-kernel rows, vectors.
+#pragma once
+
+#include "distributed.hpp"
+
+#include <string>
+#include <vector>
+
+namespace xb {
+
+enum Cmd : long long { kCreate = 1, kSetup, kSolve, kDestroy, kQuit };
+
+// Every command starts with this header, broadcast from rank 0.
+struct Header {
+  long long cmd = 0, id = 0;
+  long long values = 0;       // setup: SetupKind::Values
+  long long frame = 0, substep = 0, iteration = 0;
+  long long values_only = 0;  // setup: only the values travel (same pattern as last time)
+  long long n_global = 0;     // setup, solve
+  long long block_size = 1;   // setup, solve
+  long long near_kernel_cols = 0;  // setup
+};
+
+// Non-blocking broadcast; waiting ranks sleep between tests instead of spinning.
+void bcast_header(Header& h);
+void bcast_string(std::string& s);
+
+// Params as "key=value" lines through the one field table (so workers see exactly rank 0's).
+std::string serialize_params(const Params& p);
+Params deserialize_params(const std::string& text);
+
+// Rank 0: rows [first, last) of A, and of the near-kernel basis when nk is not null, into blk.
+void extract_block(const SparseMatrix& A, const Eigen::MatrixXd* nk, long long first, long long last, int block_size,
+                   RowBlock& blk, bool values_only);
+// Rank 0 → rank `to`: the parts of blk that travel for this setup; a worker receives them.
+void send_block(const RowBlock& blk, int to, bool values_only);
+void recv_block(RowBlock& blk, bool values_only, long long near_kernel_cols);
+
+// b (rank 0, whole) → each rank's rows; and back for x. `full` is only read/written on rank 0.
+void scatter_vector(const double* full, long long n, int block_size, std::vector<double>& local);
+void gather_vector(const std::vector<double>& local, long long n, int block_size, double* full);
+
+}  // namespace xb
