@@ -1,6 +1,8 @@
 // hypre BoomerAMG-PCG and MueLu-CG on assembled XPBD dual systems: the harness's tolerance
 // checked by recomputing ‖b − Ax‖, values-only (lazy) setups, the parameter mapping, and the
 // MPI case through the CLI (mpirun -np 2 against one process).
+#include "external_mpi.hpp"
+
 #include "harness/common.hpp"
 #include "harness/recorder.hpp"
 #include "problems/dual_system.hpp"
@@ -224,24 +226,13 @@ TEST(ExternalSolverParams, RegistryListsBothAsDistributed) {
 // ---- MPI through the CLI -------------------------------------------------------------------
 namespace {
 const std::string bench = std::string(XB_BINARY_DIR) + "/xpbd-bench";
-const std::string mpirun = "mpirun -np 2 --oversubscribe --allow-run-as-root -x OMP_NUM_THREADS=1 ";
+using test::clean_env;
+using test::mpirun;
 
 fs::path scratch() {
   const fs::path d = fs::temp_directory_path() / ("xb_ext_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
-}
-
-// This test process may itself be an MPI singleton (the solvers initialise MPI): the child
-// mpirun must not inherit its Open MPI / PMIx environment.
-std::string clean_env() {
-  std::string unset = "env";
-  for (char** e = environ; *e; ++e) {
-    const std::string kv = *e;
-    const std::string k = kv.substr(0, kv.find('='));
-    if (k.rfind("OMPI_", 0) == 0 || k.rfind("PMIX_", 0) == 0 || k.rfind("OPAL_", 0) == 0) unset += " -u " + k;
-  }
-  return unset + " ";
 }
 
 int sh(const std::string& cmd, std::string* err = nullptr) {
