@@ -6,6 +6,12 @@
 namespace xb {
 
 DualSystem::DualSystem(const Problem& prob) : prob_(prob) {
+  build_incidence();
+  build_pattern();
+}
+
+void DualSystem::build_incidence() {
+  const Problem& prob = prob_;
   const int m = prob.num_constraints();
   const int n = prob.particles.size();
   // Particle → (constraint, slot) incidence.
@@ -23,6 +29,11 @@ DualSystem::DualSystem(const Problem& prob) : prob_(prob) {
         if (ps[s] >= 0) inc_[fillpos[ps[s]]++] = {j, s};
     }
   }
+}
+
+void DualSystem::build_pattern() {
+  const Problem& prob = prob_;
+  const int m = prob.num_constraints();
   const Eigen::VectorXd& w = prob.particles.w;
 
   // Per row: the coupled constraints and the (slot, slot) pairs of shared free particles.

@@ -39,6 +39,9 @@ class DualSystem {
   const std::vector<Incidence>& incidence() const { return inc_; }
 
  private:
+  void build_incidence();  // particle → (constraint, slot)
+  void build_pattern();    // A's pattern, the shared-particle pairs of each non-zero, the diagonals
+
   const Problem& prob_;
   SparseMatrix A_;
   std::vector<int> inc_start_;  // per particle, into inc_ (all particles, pinned included)
