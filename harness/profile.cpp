@@ -2,45 +2,27 @@
 
 #include "../problems/error.hpp"
 #include "../problems/scene.hpp"
+#include "../problems/toml_catalogue.hpp"
 
-#include <algorithm>
-#include <cstdlib>
 #include <filesystem>
-
-#ifndef XB_SOURCE_DIR
-#define XB_SOURCE_DIR "."
-#endif
 
 namespace fs = std::filesystem;
 
 namespace xb {
 
-std::string profile_dir() {
-  if (const char* d = std::getenv("XB_PROFILE_DIR")) return d;
-  return std::string(XB_SOURCE_DIR) + "/problems/profiles";
-}
+namespace {
+const TomlCatalogue profiles{"profile", "profiles", "XB_PROFILE_DIR"};
+}  // namespace
 
-std::vector<std::string> profile_names() {
-  std::vector<std::string> names;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(profile_dir(), ec))
-    if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
+std::string profile_dir() { return profiles.dir(); }
+std::vector<std::string> profile_names() { return profiles.names(); }
 
 std::string resolve_profile(const std::string& name_or_file) {
-  if (name_or_file.find('/') != std::string::npos || name_or_file.ends_with(".toml")) {
-    if (!fs::is_regular_file(name_or_file)) throw Error("--profile: file '" + name_or_file + "' does not exist");
-    return name_or_file;
+  try {
+    return profiles.resolve(name_or_file);
+  } catch (const Error& e) {
+    throw Error(std::string("--profile: ") + e.what());
   }
-  const auto names = profile_names();
-  if (std::find(names.begin(), names.end(), name_or_file) == names.end()) {
-    std::string valid;
-    for (const auto& n : names) valid += (valid.empty() ? "" : ", ") + n;
-    throw Error("--profile: unknown profile '" + name_or_file + "' (valid: " + valid + ")");
-  }
-  return profile_dir() + "/" + name_or_file + ".toml";
 }
 
 void apply_profile(const std::string& name_or_file, Params& p) {

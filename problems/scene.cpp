@@ -1,6 +1,7 @@
 #include "scene.hpp"
 
 #include "error.hpp"
+#include "toml_catalogue.hpp"
 #include "meshes/generators.hpp"
 #include "meshes/real_meshes.hpp"
 
@@ -8,45 +9,20 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <sstream>
-
-#ifndef XB_SOURCE_DIR
-#define XB_SOURCE_DIR "."
-#endif
 
 namespace fs = std::filesystem;
 
 namespace xb {
 
-std::string scene_dir() {
-  if (const char* d = std::getenv("XB_SCENE_DIR")) return d;
-  return std::string(XB_SOURCE_DIR) + "/problems/scenes";
-}
+namespace {
+const TomlCatalogue scenes{"scene", "scenes", "XB_SCENE_DIR"};
+}  // namespace
 
-std::vector<std::string> scene_names() {
-  std::vector<std::string> names;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(scene_dir(), ec))
-    if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
-  std::sort(names.begin(), names.end());
-  return names;
-}
-
-std::string resolve_scene(const std::string& name_or_file) {
-  if (name_or_file.find('/') != std::string::npos || name_or_file.ends_with(".toml")) {
-    if (!fs::is_regular_file(name_or_file)) throw Error("scene file '" + name_or_file + "' does not exist");
-    return name_or_file;
-  }
-  const auto names = scene_names();
-  if (std::find(names.begin(), names.end(), name_or_file) == names.end()) {
-    std::string valid;
-    for (const auto& n : names) valid += (valid.empty() ? "" : ", ") + n;
-    throw Error("unknown scene '" + name_or_file + "' (valid: " + valid + ")");
-  }
-  return scene_dir() + "/" + name_or_file + ".toml";
-}
+std::string scene_dir() { return scenes.dir(); }
+std::vector<std::string> scene_names() { return scenes.names(); }
+std::string resolve_scene(const std::string& name_or_file) { return scenes.resolve(name_or_file); }
 
 namespace {
 std::string node_text(const toml::node& n, const std::string& where) {
