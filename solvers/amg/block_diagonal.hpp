@@ -25,6 +25,8 @@ class BlockDiagonal {
   double inverse(int I, int r, int s) const {
     return inv_[offset_[I] + r * (start_[I + 1] - start_[I]) + s];
   }
+  // D_I⁻¹, row-major b_I × b_I.
+  const double* inverse_block(int I) const { return inv_.data() + offset_[I]; }
 
  private:
   std::vector<int> start_;     // node rows, as NodeLayout::node_start

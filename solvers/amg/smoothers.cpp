@@ -2,6 +2,8 @@
 
 #include "../../problems/error.hpp"
 #include "../kernels.hpp"
+#include "block_chebyshev.hpp"
+#include "block_gs.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -177,37 +179,15 @@ class ChebyshevSmoother final : public DiagonalSmoother {
   void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { presmooth(A, b, x, false); }
 
  private:
-  static constexpr int kDegree = 3;
-  // Chebyshev iteration for D⁻¹A with eigenvalues in [a, b] (Saad, Alg. 12.1): the error is
-  // multiplied by a fixed polynomial of D⁻¹A, the same before and after, hence symmetric.
   void apply(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) {
-    const double hi = 1.1 * lambda_, lo = lambda_ / 30.0;
-    const double theta = 0.5 * (hi + lo), delta = 0.5 * (hi - lo), sigma = theta / delta;
-    double rho = 1.0 / sigma;
-    const long n = b.size();
-    if (x_zero) {
-      r_.resize(n);
+    chebyshev_iteration(
+        lambda_, b.size(), x, x_zero, r_, d_, [&](Vector& r) { scaled_residual(A, b, x, r); },
+        [&](Vector& r) {
+          const long n = b.size();
+          r.resize(n);
 #pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-      for (long i = 0; i < n; ++i) r_[i] = inv_diag_[i] * b[i];
-    } else {
-      scaled_residual(A, b, x, r_);
-    }
-    d_ = r_ / theta;
-    for (int k = 1;; ++k) {
-      if (x_zero && k == 1) {
-        x = d_;
-      } else {
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-        for (long i = 0; i < n; ++i) x[i] += d_[i];
-      }
-      if (k == kDegree) break;
-      scaled_residual(A, b, x, r_);
-      const double rho_new = 1.0 / (2.0 * sigma - rho);
-      const double c1 = rho_new * rho, c2 = 2.0 * rho_new / delta;
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-      for (long i = 0; i < n; ++i) d_[i] = c1 * d_[i] + c2 * r_[i];
-      rho = rho_new;
-    }
+          for (long i = 0; i < n; ++i) r[i] = inv_diag_[i] * b[i];
+        });
   }
 };
 
@@ -233,12 +213,16 @@ class GaussSeidelSmoother final : public Smoother {
 
 }  // namespace
 
-std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A) {
+const char* const kSmootherKinds = "jacobi, chebyshev, gs, block_gs, block_jacobi, block_chebyshev";
+
+std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes) {
   if (opt.sweeps < 1) throw Error("amg.smoother_sweeps must be >= 1");
   if (opt.kind == "jacobi") return std::make_unique<JacobiSmoother>(opt, A);
   if (opt.kind == "chebyshev") return std::make_unique<ChebyshevSmoother>(opt, A);
   if (opt.kind == "gs") return std::make_unique<GaussSeidelSmoother>(opt, A);
-  throw Error("amg.smoother: unknown smoother '" + opt.kind + "' (valid: jacobi, chebyshev, gs)");
+  if (opt.kind == "block_gs") return std::make_unique<BlockGaussSeidelSmoother>(opt, A, nodes);
+  if (opt.kind == "block_jacobi" || opt.kind == "block_chebyshev") return make_block_diagonal_smoother(opt, A, nodes);
+  throw Error("amg.smoother: unknown smoother '" + opt.kind + "' (valid: " + kSmootherKinds + ")");
 }
 
 }  // namespace xb::amg

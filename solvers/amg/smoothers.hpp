@@ -6,12 +6,15 @@
 //  chebyshev: degree-3 Chebyshev polynomial in D⁻¹A on [ρ/30, 1.1ρ] (the authors' cloth setting),
 //             ρ estimated per level (the authors reuse level 0's; per level is cheap and safer).
 //  gs:        multicolour Gauss–Seidel, forward sweeps before, backward sweeps after.
+//  block_gs, block_jacobi, block_chebyshev: the same with D the node blocks of a block system
+//             (block_gs.hpp, block_chebyshev.hpp); on a scalar layout D is the diagonal.
 // λ_max(D⁻¹A) comes from power iteration with the Rayleigh quotient in the D inner product; a
 // values-only refresh warm-starts it from the previous dominant vector.
 #pragma once
 
 #include "../../problems/sparse.hpp"
 #include "../coloring.hpp"
+#include "nodal.hpp"
 
 #include <memory>
 #include <string>
@@ -36,6 +39,39 @@ void multicolor_gs_sweep(const SparseMatrix& A, const Vector& inv_diag, const Co
 double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector& v, int iterations,
                            unsigned seed = 1);
 
+// The degree-3 Chebyshev iteration for D⁻¹A with eigenvalues in [λ/30, 1.1λ] (Saad, Alg. 12.1):
+// the error is multiplied by a fixed polynomial of D⁻¹A, the same before and after, hence
+// symmetric. scaled_residual(r) sets r = D⁻¹(b − A x) for the current x; scale(r) sets r = D⁻¹b
+// (the residual of x = 0, without a product). r and d are work vectors.
+template <class ScaledResidual, class Scale>
+void chebyshev_iteration(double lambda, long n, Vector& x, bool x_zero, Vector& r, Vector& d,
+                         ScaledResidual&& scaled_residual, Scale&& scale) {
+  constexpr int kDegree = 3;
+  const double hi = 1.1 * lambda, lo = lambda / 30.0;
+  const double theta = 0.5 * (hi + lo), delta = 0.5 * (hi - lo), sigma = theta / delta;
+  double rho = 1.0 / sigma;
+  if (x_zero)
+    scale(r);
+  else
+    scaled_residual(r);
+  d = r / theta;
+  for (int k = 1;; ++k) {
+    if (x_zero && k == 1) {
+      x = d;
+    } else {
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+      for (long i = 0; i < n; ++i) x[i] += d[i];
+    }
+    if (k == kDegree) break;
+    scaled_residual(r);
+    const double rho_new = 1.0 / (2.0 * sigma - rho);
+    const double c1 = rho_new * rho, c2 = 2.0 * rho_new / delta;
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+    for (long i = 0; i < n; ++i) d[i] = c1 * d[i] + c2 * r[i];
+    rho = rho_new;
+  }
+}
+
 class Smoother {
  public:
   virtual ~Smoother() = default;
@@ -45,19 +81,25 @@ class Smoother {
   // `sweeps` times; x_zero says x is zero on entry (saves a matrix product).
   virtual void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) = 0;
   virtual void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) = 0;
-  // The λ_max(D⁻¹A) estimate in use (0 for gs).
+  // The λ_max(D⁻¹A) estimate in use (0 for the Gauss–Seidel kinds); D is the scalar diagonal,
+  // or the node blocks where block_diagonal() says so.
   virtual double lambda_max() const { return 0; }
+  virtual bool block_diagonal() const { return false; }
 };
 
 struct SmootherOptions {
-  std::string kind = "chebyshev";  // jacobi | chebyshev | gs
+  std::string kind = "chebyshev";  // jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
   int sweeps = 1;
   int power_iterations = 20;          // Lanczos steps at setup
   int refresh_power_iterations = 10;  // Lanczos steps at refresh
   unsigned seed = 1;
 };
 
-// Throws xb::Error naming amg.smoother for an unknown kind.
-std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A);
+// The smoother kinds make_smoother knows, for messages: "jacobi, chebyshev, ...".
+extern const char* const kSmootherKinds;
+
+// `nodes`: the level's node layout (the block kinds' D; scalar: 1×1 blocks). Throws xb::Error
+// naming amg.smoother for an unknown kind.
+std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes = {});
 
 }  // namespace xb::amg
