@@ -57,8 +57,11 @@ struct Params {
   int amg_near_kernel_sweeps = 20;
   int amg_near_kernel_vectors = 1;
   std::string amg_prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
-  std::string amg_smoother = "chebyshev";  // jacobi | chebyshev | gs
-  int amg_smoother_sweeps = 1;
+  double amg_nodal_strength_threshold = 0.0;         // block systems (primal K), level 0
+  double amg_coarse_nodal_strength_threshold = 0.1;  // levels >= 1 (< 0: the level-0 value)
+  std::string amg_prolongator_diagonal = "scalar";   // D of the smoothed P: scalar | block
+  std::string amg_smoother = "auto";  // auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
+  int amg_smoother_sweeps = 0;        // 0: auto (1 dual, 2 primal)
   int amg_setup_interval = 20;       // frames between rebuilds of aggregates and P
   int amg_max_coarse = 400;
   int amg_max_levels = 10;

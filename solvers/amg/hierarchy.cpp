@@ -17,6 +17,9 @@ AmgOptions AmgOptions::from_params(const Params& p) {
   o.near_kernel.vectors = p.amg_near_kernel_vectors;
   o.near_kernel.seed = static_cast<unsigned>(p.seed);
   o.prolongator = p.amg_prolongator;
+  o.nodal_strength_threshold = p.amg_nodal_strength_threshold;
+  o.coarse_nodal_strength_threshold = p.amg_coarse_nodal_strength_threshold;
+  o.prolongator_diagonal = p.amg_prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
   o.smoother.kind = p.amg_smoother;
   o.smoother.sweeps = p.amg_smoother_sweeps;
   o.smoother.seed = static_cast<unsigned>(p.seed);
@@ -33,19 +36,23 @@ void check_option_names(const AmgOptions& opt) {
   if (opt.prolongator != "auto" && opt.prolongator != "tentative" && opt.prolongator != "smoothed")
     throw Error("amg.prolongator: unknown kind '" + opt.prolongator + "' (valid: auto, tentative, smoothed)");
   const std::string& sm = opt.smoother.kind;
-  if (sm != "jacobi" && sm != "chebyshev" && sm != "gs")
-    throw Error("amg.smoother: unknown smoother '" + sm + "' (valid: jacobi, chebyshev, gs)");
+  const std::string kinds = std::string(", ") + kSmootherKinds + ",";
+  if (sm != "auto" && (sm.empty() || kinds.find(", " + sm + ",") == std::string::npos))
+    throw Error("amg.smoother: unknown smoother '" + sm + "' (valid: auto, " + kSmootherKinds + ")");
 }
 
 AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
   check_option_names(opt);
   if (info.block_size < 1) throw Error("mgpbd: block size must be >= 1");
+  if (opt.smoother.sweeps < 0) throw Error("amg.smoother_sweeps must be >= 0 (0: auto)");
   AmgOptions o = opt;
   const bool block = info.block_size > 1;
   if (o.near_kernel.kind == "auto") o.near_kernel.kind = block && info.near_kernel ? "rigid" : "ones";
   if (o.near_kernel.kind == "rigid" && !info.near_kernel)
     throw Error("amg.near_kernel=rigid needs the rigid-body modes of the primal form (form=primal); this system has none");
   if (o.prolongator == "auto") o.prolongator = block ? "smoothed" : "tentative";
+  if (o.smoother.kind == "auto") o.smoother.kind = block ? kBlockSmoother : "chebyshev";
+  if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
   return o;
 }
 
@@ -85,12 +92,13 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   Tentative T = tentative_prolongator(agg, B);
   const int nc = static_cast<int>(T.P.cols());
   if (nc == 0 || nc >= n) return false;       // no coarsening progress
-  L.smoother = make_smoother(opt_.smoother, Al);
+  L.smoother = make_smoother(opt_.smoother, Al, L.nodes);
   if (opt_.prolongator == "smoothed") {
-    // The smoother's λ_max(D⁻¹A) is the one the scalar-diagonal P needs: no second Lanczos.
+    // Where the smoother's D is the prolongator's, its λ_max(D⁻¹A) is reused: no second Lanczos.
+    const bool block_p = opt_.prolongator_diagonal == JacobiDiagonal::Block && !L.nodes.scalar();
+    const double known = L.smoother->block_diagonal() == block_p ? L.smoother->lambda_max() : 0.0;
     SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,
-                                               opt_.smoother.power_iterations, opt_.smoother.seed,
-                                               L.smoother->lambda_max());
+                                               opt_.smoother.power_iterations, opt_.smoother.seed, known);
     T.P = std::move(S.P);
     T.R = std::move(S.R);
     T.max_row_entries = 0;

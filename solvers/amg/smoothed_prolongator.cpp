@@ -118,7 +118,7 @@ SparseMatrix add_scaled(const SparseMatrix& X, double a, const SparseMatrix& Y) 
 
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
-                                       double scalar_lambda) {
+                                       double known_lambda) {
   if (A.rows() != T.rows()) throw Error("smoothed prolongator: A and T do not fit");
   SmoothedProlongator out;
   Vector v;
@@ -126,11 +126,11 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
   if (diag == JacobiDiagonal::Block && !nodes.scalar()) {
     BlockDiagonal D;
     D.build(A, nodes);
-    out.lambda = estimate_lambda_max(A, D, v, lanczos_steps, seed);
+    out.lambda = known_lambda > 0 ? known_lambda : estimate_lambda_max(A, D, v, lanczos_steps, seed);
     DinvAT = block_scale_rows(D, spgemm(A, T));
   } else {
     const Vector inv_diag = inverse_diagonal(A);
-    out.lambda = scalar_lambda > 0 ? scalar_lambda : estimate_lambda_max(A, inv_diag, v, lanczos_steps, seed);
+    out.lambda = known_lambda > 0 ? known_lambda : estimate_lambda_max(A, inv_diag, v, lanczos_steps, seed);
     DinvAT = spgemm(A, T);
     const int n = static_cast<int>(DinvAT.rows());
 #pragma omp parallel for schedule(static)
