@@ -174,7 +174,7 @@ void check_spd(Hierarchy& h, const std::string& what) {
 
 TEST(AmgBlockVcycle, SymmetricPositiveDefiniteForEverySmoother) {
   for (const auto* c : {&bar(), &cloth()})
-    for (const std::string sm : {"jacobi", "chebyshev", "gs"})
+    for (const std::string sm : {"jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"})
       for (const std::string pr : {"smoothed", "tentative"})
         for (const JacobiDiagonal diag : {JacobiDiagonal::Scalar, JacobiDiagonal::Block}) {
           AmgOptions o;
