@@ -9,9 +9,9 @@
 // cloth_hang at resolution 160 (77,120 rows), frame 2, outer iteration 1. --xb_set applies to
 // the scene when capturing and to the solvers (e.g. --xb_set=amg.smoother=jacobi, linear.tol=1e-6).
 // Not a ctest: it takes minutes.
-#include "../harness/common.hpp"
-#include "../harness/capture.hpp"
-#include "../harness/system_io.hpp"
+#include "../harness/cli/run_setup.hpp"
+#include "../harness/sim/capture.hpp"
+#include "../harness/io/system_io.hpp"
 #include "../problems/error.hpp"
 #include "../problems/scene.hpp"
 #include "../solvers/kernels.hpp"

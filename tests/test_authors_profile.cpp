@@ -2,11 +2,13 @@
 // line-search step, their XPBD baseline, the scene keys mesh_height / init, and --profile.
 // Each test fails if its option is ignored: the numbers are analytic (a one-spring pendulum whose
 // constraint stays linear along the motion) or compare the option on and off.
-#include "harness/common.hpp"
-#include "harness/line_search.hpp"
-#include "harness/profile.hpp"
-#include "harness/state_io.hpp"
-#include "harness/stepper.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
+#include "harness/sim/line_search.hpp"
+#include "harness/cli/profile.hpp"
+#include "harness/io/state_io.hpp"
+#include "harness/sim/stepper.hpp"
 #include "problems/error.hpp"
 #include "problems/scene.hpp"
 #include "test_support.hpp"

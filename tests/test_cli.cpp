@@ -1,6 +1,6 @@
 // The end-to-end harness through its CLI: the stalling that motivates the paper, the report's
 // JSON contract, and bad input (one line, non-zero exit, nothing written or lost).
-#include "harness/recorder.hpp"
+#include "harness/io/recorder.hpp"
 
 #include <gtest/gtest.h>
 

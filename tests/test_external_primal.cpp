@@ -4,7 +4,9 @@
 // are used (hypre's systems options, MueLu's nullspace); 1 rank vs 2 ranks.
 #include "external_mpi.hpp"
 
-#include "harness/common.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
 #include "problems/params.hpp"
 #include "problems/scene.hpp"
 #include "solvers/distributed.hpp"

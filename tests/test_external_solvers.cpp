@@ -3,8 +3,10 @@
 // MPI case through the CLI (mpirun -np 2 against one process).
 #include "external_mpi.hpp"
 
-#include "harness/common.hpp"
-#include "harness/recorder.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
+#include "harness/io/recorder.hpp"
 #include "problems/dual_system.hpp"
 #include "problems/params.hpp"
 #include "problems/scene.hpp"

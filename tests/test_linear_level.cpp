@@ -1,11 +1,13 @@
 // The linear level (issue 3): `capture` writes exactly the assembled dual system, `solve` records
 // what every linear solver did on it, with residuals and errors that the test recomputes
 // independently (Eigen's sparse Cholesky, not CHOLMOD).
-#include "harness/commands.hpp"
-#include "harness/common.hpp"
-#include "harness/recorder.hpp"
-#include "harness/stepper.hpp"
-#include "harness/system_io.hpp"
+#include "harness/cli/commands.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
+#include "harness/io/recorder.hpp"
+#include "harness/sim/stepper.hpp"
+#include "harness/io/system_io.hpp"
 #include "test_support.hpp"
 #include "problems/error.hpp"
 #include "problems/scene.hpp"

@@ -1,10 +1,12 @@
 // The form axis through the commands: captured systems carry the primal data, `solve` and `run`
 // take --form, every run records the form it used, and form=primal is refused where it cannot
 // exist (compliance 0).
-#include "harness/commands.hpp"
-#include "harness/common.hpp"
-#include "harness/stepper.hpp"
-#include "harness/system_io.hpp"
+#include "harness/cli/commands.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
+#include "harness/sim/stepper.hpp"
+#include "harness/io/system_io.hpp"
 #include "problems/error.hpp"
 #include "problems/scene.hpp"
 #include "test_support.hpp"

@@ -1,8 +1,8 @@
 // The primal form K Δx = Jᵀα̃⁻¹b against the dual system it replaces: K against an independent
 // sparse product, Δλ against the dual CHOLMOD solution, the residual identity, the rigid modes,
 // the refusal at zero compliance, and the Jacobian's round trip through its CSR form.
-#include "harness/primal_solve.hpp"
-#include "harness/system_io.hpp"
+#include "harness/sim/primal_solve.hpp"
+#include "harness/io/system_io.hpp"
 #include "problems/dual_system.hpp"
 #include "problems/error.hpp"
 #include "problems/params.hpp"

@@ -1,9 +1,11 @@
 // The paper's scenes (issue 5): builders (counts, pins, colliders), variants, stability checks,
 // mesh output, and every scene × every method on a tiny size ending ok or with an honest status.
-#include "harness/common.hpp"
-#include "harness/mesh_writer.hpp"
-#include "harness/stability.hpp"
-#include "harness/stepper.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
+#include "harness/io/mesh_writer.hpp"
+#include "harness/sim/stability.hpp"
+#include "harness/sim/stepper.hpp"
 #include "problems/error.hpp"
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"

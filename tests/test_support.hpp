@@ -2,7 +2,7 @@
 // OpenMP thread, a temporary directory per test, and typed access to a run's attributes.
 #pragma once
 
-#include "harness/recorder.hpp"
+#include "harness/io/recorder.hpp"
 
 #include <gtest/gtest.h>
 #include <mpi.h>

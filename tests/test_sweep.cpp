@@ -1,10 +1,12 @@
 // Sweeps (spec validation, expansion, crash safety and resume through the real CLI) and the
 // per-substep reference behind position_error.
-#include "harness/common.hpp"
-#include "harness/recorder.hpp"
-#include "harness/reference.hpp"
-#include "harness/stepper.hpp"
-#include "harness/sweep.hpp"
+#include "harness/cli/report.hpp"
+#include "harness/cli/run_setup.hpp"
+#include "harness/io/run_record.hpp"
+#include "harness/io/recorder.hpp"
+#include "harness/sim/reference.hpp"
+#include "harness/sim/stepper.hpp"
+#include "harness/cli/sweep.hpp"
 #include "problems/error.hpp"
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"

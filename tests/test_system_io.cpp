@@ -1,7 +1,7 @@
 // Captured-system files (harness/system_io): a corrupt CSR array is named as what it is, and J
 // survives the round trip through its CSR form.
-#include "harness/commands.hpp"
-#include "harness/system_io.hpp"
+#include "harness/cli/commands.hpp"
+#include "harness/io/system_io.hpp"
 #include "problems/error.hpp"
 #include "test_support.hpp"
 

@@ -14,8 +14,8 @@
 #include "../../problems/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
-#include "../args.hpp"
-#include "../stepper.hpp"
+#include "../cli/args.hpp"
+#include "../sim/stepper.hpp"
 
 #include <mpi.h>
 #include <omp.h>

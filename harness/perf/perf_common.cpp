@@ -3,8 +3,9 @@
 #include "../../problems/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
-#include "../common.hpp"
-#include "../capture.hpp"
+#include "../cli/run_setup.hpp"
+#include "../io/run_record.hpp"
+#include "../sim/capture.hpp"
 
 namespace xb::perf {
 

@@ -5,7 +5,7 @@
 
 #include "../../problems/params.hpp"
 #include "../../problems/sparse.hpp"
-#include "../system_io.hpp"
+#include "../io/system_io.hpp"
 
 #include <string>
 #include <vector>

@@ -1,0 +1,230 @@
+// sweep SPEC.toml --out FILE.h5: every (grid point × solver × repeat) of a spec is one run,
+// appended to FILE as soon as it ends (atomically, harness/recorder). Rerunning the same command
+// skips the runs already in FILE (matched by their sweep_key) and does the rest; a failed run is
+// recorded with its status and the sweep goes on.
+#include "args.hpp"
+#include "commands.hpp"
+#include "report.hpp"
+#include "run_setup.hpp"
+#include "../io/run_record.hpp"
+#include "sweep.hpp"
+
+#include "../../problems/error.hpp"
+#include "../../problems/scene.hpp"
+#include "../../solvers/timer.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+namespace xb {
+
+namespace {
+
+std::string duration(double s) {
+  char b[32];
+  if (s < 60) std::snprintf(b, sizeof b, "%.0fs", s);
+  else if (s < 3600) std::snprintf(b, sizeof b, "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
+  else std::snprintf(b, sizeof b, "%dh%02dm", static_cast<int>(s) / 3600, (static_cast<int>(s) % 3600) / 60);
+  return b;
+}
+
+std::string describe(const SweepJob& j, int repeats) {
+  std::string s = (j.point_text == "-" ? "" : j.point_text + " ") + j.solver;
+  if (repeats > 1) s += " #" + std::to_string(j.repeat);
+  return s;
+}
+
+// One progress line on a terminal, redrawn in place.
+void draw_bar(int done, int total, const std::string& current, double eta) {
+  const int width = 24;
+  const int filled = total > 0 ? done * width / total : width;
+  std::string bar(filled, '#');
+  bar += std::string(width - filled, '.');
+  std::ostringstream os;
+  os << "\r\033[K[" << bar << "] " << done << "/" << total << "  " << current;
+  if (eta >= 0) os << "  ETA " << duration(eta);
+  std::cerr << os.str() << std::flush;
+}
+
+void print_table(const std::vector<std::vector<std::string>>& rows) {
+  std::vector<size_t> width;
+  for (const auto& row : rows)
+    for (size_t c = 0; c < row.size(); ++c) {
+      if (width.size() <= c) width.push_back(0);
+      width[c] = std::max(width[c], row[c].size());
+    }
+  for (const auto& row : rows) {
+    for (size_t c = 0; c < row.size(); ++c) std::cout << std::left << std::setw(width[c] + 2) << row[c];
+    std::cout << "\n";
+  }
+}
+
+// The runs of this sweep already in `out` (sweep_key → run name) and how many runs it holds.
+// Throws if the file holds another sweep's runs.
+std::map<std::string, std::string> finished_runs(const std::string& out, const std::string& base, int& existing) {
+  std::map<std::string, std::string> finished;
+  existing = 0;
+  if (!std::filesystem::exists(out)) return finished;
+  const auto runs = read_runs(out, false);
+  existing = static_cast<int>(runs.size());
+  for (const auto& r : runs) {
+    const std::string b = attr_cell(r, "sweep_base");
+    if (b == "-") continue;
+    if (b != base)
+      throw Error("sweep: " + out + " holds runs of another sweep (different scene or fixed parameters, run " + r.name +
+                  "); write to another --out");
+    finished[attr_cell(r, "sweep_key")] = r.name;
+  }
+  return finished;
+}
+
+// One job: the problem of its grid point (built once per point, shared by its solvers and
+// repeats; run_simulation copies it), the run, its record with the sweep's attributes.
+class JobRunner {
+ public:
+  JobRunner(const SweepSpec& spec, std::string base, std::string swept)
+      : spec_(spec), base_(std::move(base)), swept_(std::move(swept)) {
+    opt_.time_budget = spec.time_budget;
+    opt_.reference = spec.reference;
+  }
+  RunRecord run(const SweepJob& job, int index, RunResult& res) {
+    if (job.point != point_) {
+      prob_.reset();
+      error_.clear();
+      point_ = job.point;
+      try {
+        prob_ = std::make_unique<Problem>(build_problem(job.params));
+      } catch (const std::exception& e) {
+        error_ = e.what();
+      }
+    }
+    if (prob_) {
+      try {
+        res = run_simulation(*prob_, job.params, job.solver, opt_);
+      } catch (const std::exception& e) {
+        res.status = "error";
+        res.message = e.what();
+      }
+    } else {
+      res.status = "error";
+      res.message = "cannot build the scene: " + error_;
+    }
+    RunRecord rec = make_simulation_record(run_name(index, job.params.scene, job.solver), job.params, job.solver, res);
+    rec.attrs["sweep_key"] = job.key;
+    rec.attrs["sweep_base"] = base_;
+    rec.attrs["sweep_params"] = swept_;
+    rec.attrs["sweep_point"] = job.point_text;
+    rec.attrs["sweep_index"] = static_cast<long long>(job.index);
+    rec.attrs["sweep_repeat"] = static_cast<long long>(job.repeat);
+    rec.attrs["sweep_spec"] = spec_.path;
+    if (!spec_.description.empty()) rec.attrs["sweep_description"] = spec_.description;
+    rec.attrs["time_budget"] = spec_.time_budget;
+    rec.attrs["reference"] = static_cast<long long>(spec_.reference);
+    return rec;
+  }
+
+ private:
+  const SweepSpec& spec_;
+  std::string base_, swept_;
+  RunOptions opt_;
+  std::unique_ptr<Problem> prob_;
+  int point_ = -1;
+  std::string error_;
+};
+
+// The summary: every run of this sweep, in sweep order, whether run now or before.
+void print_summary(const SweepSpec& spec, const std::vector<SweepJob>& jobs, const std::string& out) {
+  std::map<std::string, RunRecord> by_key;
+  if (std::filesystem::exists(out))
+    for (auto& r : read_runs(out, false)) by_key[attr_cell(r, "sweep_key")] = std::move(r);
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> header{"run"};
+  for (const auto& [k, v] : spec.grid) header.push_back(k);
+  for (const char* c : {"solver", "repeat", "status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"})
+    header.push_back(c);
+  if (spec.reference) header.push_back("final_position_error");
+  rows.push_back(header);
+  for (const auto& j : jobs) {
+    auto it = by_key.find(j.key);
+    if (it == by_key.end()) continue;
+    const RunRecord& r = it->second;
+    std::vector<std::string> row{r.name};
+    for (const auto& [k, v] : j.values) row.push_back(v);
+    row.push_back(j.solver);
+    row.push_back(std::to_string(j.repeat));
+    for (const char* c : {"status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"})
+      row.push_back(attr_cell(r, c));
+    if (spec.reference) row.push_back(attr_cell(r, "final_position_error"));
+    rows.push_back(row);
+  }
+  print_table(rows);
+}
+
+}  // namespace
+
+int cmd_sweep(const CommandArgs& argv) {
+  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}}, 1);
+  if (args.positional().empty())
+    throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--time-budget S])");
+  const std::string out = args.require("--out");
+  // The whole spec and every combination are checked before anything runs.
+  SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"));
+  if (args.has("--time-budget")) {
+    spec.time_budget = args.get_double("--time-budget", 0);
+    if (spec.time_budget < 0) throw Error("sweep: --time-budget must be >= 0");
+  }
+  const std::vector<SweepJob> jobs = expand_sweep(spec);
+  const std::string base = sweep_base_hash(spec);
+  std::string swept;
+  for (const auto& [k, v] : spec.grid) swept += (swept.empty() ? "" : ",") + k;
+  int existing = 0;
+  auto finished = finished_runs(out, base, existing);  // resume: what is already in the file
+  int todo = 0;
+  for (const auto& j : jobs) todo += finished.count(j.key) ? 0 : 1;
+
+  const bool tty = isatty(STDERR_FILENO);
+  const int total = static_cast<int>(jobs.size());
+  std::cerr << "sweep: " << spec.path << ": " << total << " runs (" << (total - todo) << " already in " << out << ", "
+            << todo << " to do)\n";
+  JobRunner runner(spec, base, swept);
+  int done = total - todo, index = existing, timed = 0;
+  double spent = 0;
+  for (const auto& job : jobs) {
+    if (finished.count(job.key)) continue;
+    const std::string what = describe(job, spec.repeats);
+    const double eta = timed > 0 ? spent / timed * (total - done) : -1;
+    if (tty) draw_bar(done, total, what, eta);
+    else std::cerr << "sweep: [" << done + 1 << "/" << total << "] " << what << " ..." << std::flush;
+    Timer clock;
+    RunResult res;
+    const RunRecord rec = runner.run(job, ++index, res);
+    append_runs(out, {rec}, existing == 0 && index == 1);
+    finished[job.key] = rec.name;
+    ++done;
+    spent += clock.seconds();
+    ++timed;
+    if (!tty) {
+      std::ostringstream os;
+      os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
+         << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
+      std::cerr << os.str() << "\n";
+    }
+  }
+  if (tty) {
+    draw_bar(done, total, "done", -1);
+    std::cerr << "\n";
+  }
+  print_summary(spec, jobs, out);
+  return 0;
+}
+
+}  // namespace xb

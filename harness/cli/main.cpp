@@ -1,0 +1,104 @@
+// xpbd-bench: the command-line entry point. Bad input ends with one line naming what is wrong
+// and exit code 2; nothing already written is lost.
+#include "commands.hpp"
+
+#include "../../problems/error.hpp"
+#include "../../solvers/distributed.hpp"
+
+#include <mpi.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <string>
+
+namespace {
+struct Command {
+  const char* name;
+  int (*fn)(const xb::CommandArgs&);
+  const char* usage;
+};
+const Command commands[] = {
+    {"list", xb::cmd_list, "list                                  scenes and solvers, one per line"},
+    {"run", xb::cmd_run,
+     "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--reference] [--save-state FILE --frame-of-state F] [--load-state FILE] --out FILE.h5"},
+    {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
+    {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--time-budget S]   (resumes: skips runs already in FILE)"},
+    {"capture", xb::cmd_capture,
+     "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] --out PREFIX"},
+    {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5"},
+};
+
+// OpenMP threads must sleep at barriers, not spin: on a loaded machine a spinning team waiting for
+// a descheduled thread made the same solve 7x slower (16.5 s instead of 2.3 s). libgomp reads
+// OMP_WAIT_POLICY in its load-time constructor, before main, so setting it here is too late for
+// this process: when the user has not chosen a policy, set `passive` and re-execute this binary
+// (same pid, argv and environment, so an mpirun launch stays intact) before MPI_Init or any
+// OpenMP call. GOMP_SPINCOUNT is left alone: under `passive` libgomp's spin count is already 0
+// unless the user sets GOMP_SPINCOUNT, and that, like an explicit OMP_WAIT_POLICY, is their choice.
+// Loop guard: XB_WAIT_POLICY_REEXEC holds the pid that re-executed; the new image (same pid)
+// sees it, never re-executes again, and removes it so that child processes start clean.
+void ensure_passive_wait_policy(char** argv) {
+  constexpr const char* marker = "XB_WAIT_POLICY_REEXEC";
+  const std::string pid = std::to_string(::getpid());
+  const char* m = std::getenv(marker);
+  const bool reexecuted = m && pid == m;
+  if (m) ::unsetenv(marker);
+  if (reexecuted || std::getenv("OMP_WAIT_POLICY")) return;
+  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0 || ::setenv(marker, pid.c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+  // Only reached if execv failed: run on with the runtime's default policy, which the run's
+  // provenance (omp_wait_policy = default) and `report` then show.
+  ::unsetenv("OMP_WAIT_POLICY");
+  ::unsetenv(marker);
+}
+
+void usage(std::ostream& os) {
+  os << "usage: xpbd-bench COMMAND [options]\n";
+  for (const auto& c : commands) os << "  " << c.usage << "\n";
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  ensure_passive_wait_policy(argv);
+  MPI_Init(&argc, &argv);
+  // Under mpirun, ranks > 0 only serve the distributed solvers (hypre, muelu) of rank 0.
+  if (xb::mpi_rank() > 0) {
+    const int wrc = xb::serve_workers();
+    xb::finalize_external_libraries();
+    MPI_Finalize();
+    return wrc;
+  }
+  int rc = 0;
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    usage(argc < 2 ? std::cerr : std::cout);
+    rc = argc < 2 ? 2 : 0;
+  } else {
+    const std::string name = argv[1];
+    const Command* cmd = nullptr;
+    for (const auto& c : commands)
+      if (name == c.name) cmd = &c;
+    if (!cmd) {
+      std::string valid;
+      for (const auto& c : commands) valid += (valid.empty() ? "" : ", ") + std::string(c.name);
+      std::cerr << "xpbd-bench: unknown command '" << name << "' (valid: " << valid << ")\n";
+      rc = 2;
+    } else {
+      try {
+        rc = cmd->fn(xb::CommandArgs(argv + 2, argv + argc));
+      } catch (const xb::Error& e) {
+        std::cerr << "xpbd-bench: " << e.what() << "\n";
+        rc = 2;
+      } catch (const std::exception& e) {
+        std::cerr << "xpbd-bench: internal error: " << e.what() << "\n";
+        rc = 3;
+      }
+    }
+  }
+  xb::stop_workers();
+  xb::finalize_external_libraries();
+  MPI_Finalize();
+  return rc;
+}

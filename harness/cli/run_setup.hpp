@@ -1,0 +1,33 @@
+// What `run`, `solve`, `capture` and `sweep` share before anything runs: the parameters (defaults ←
+// scene ← profile ← --set) and the method list (--solver × --form).
+#pragma once
+
+#include "../../problems/params.hpp"
+
+#include <string>
+#include <vector>
+
+namespace xb {
+
+// defaults ← the scene spec ← the profile (cli/profile.hpp; "" = none) ← --set key=value
+// overrides (in order), then validate().
+Params resolve_params(const std::string& scene_name_or_file, const std::vector<std::string>& sets,
+                      const std::string& profile = "");
+// "key=value" → set_param (where = "--set").
+void apply_set(Params& p, const std::string& key_value);
+
+// A comma-separated list of method names, each known and available; throws listing valid ones.
+// linear_only rejects the local methods.
+std::vector<std::string> parse_methods(const std::string& list, bool linear_only = false);
+
+// One run of `run` or `solve`: a method and the form of its linear step.
+struct MethodRun {
+  std::string method;
+  std::string form;  // dual | primal | auto for a global method ("" = the parameters' form); "" for a local one
+  std::string tag;   // for the run's name: the method, with "_<form>" when several forms were asked for
+};
+// The runs of --solver × --form: a local method runs once, a global method once per form of
+// `form_list` (comma-separated dual | primal | auto; empty = the parameters' form only).
+std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, const std::string& form_list);
+
+}  // namespace xb

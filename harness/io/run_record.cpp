@@ -1,0 +1,157 @@
+#include "run_record.hpp"
+
+#include "../sim/reference.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#ifndef XB_GIT_SHA
+#define XB_GIT_SHA "unknown"
+#endif
+
+namespace xb {
+
+namespace {
+std::string machine_description() {
+  char host[256] = "";
+  gethostname(host, sizeof host);
+  std::string cpu;
+  std::ifstream f("/proc/cpuinfo");
+  for (std::string line; std::getline(f, line);)
+    if (line.rfind("model name", 0) == 0) {
+      cpu = line.substr(line.find(':') + 2);
+      break;
+    }
+  return std::string(host) + "; " + cpu + "; " + std::to_string(sysconf(_SC_NPROCESSORS_ONLN)) + " cores";
+}
+
+std::string now_iso() {
+  std::time_t t = std::time(nullptr);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+// What the timings of this process ran under, taken once at load time (before main, so before
+// any work): the OpenMP wait policy the runtime read from the environment (libgomp reads it at
+// load time too; harness/main.cpp re-executes with `passive` when none was set) and the machine's
+// one-minute load average.
+struct ProcessStart {
+  std::string omp_wait_policy;  // lower case; "default" when unset or empty (the runtime spins, then sleeps)
+  double load_average = -1;     // < 0: /proc/loadavg unreadable
+  long long cpu_count = 0;
+};
+ProcessStart read_process_start() {
+  ProcessStart s;
+  if (const char* w = std::getenv("OMP_WAIT_POLICY")) {
+    for (const char* c = w; *c; ++c)
+      if (!std::isspace(static_cast<unsigned char>(*c))) s.omp_wait_policy += static_cast<char>(std::tolower(static_cast<unsigned char>(*c)));
+  }
+  if (s.omp_wait_policy.empty()) s.omp_wait_policy = "default";
+  if (std::FILE* f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf", &s.load_average) != 1) s.load_average = -1;
+    std::fclose(f);
+  }
+  s.cpu_count = sysconf(_SC_NPROCESSORS_ONLN);
+  return s;
+}
+const ProcessStart process_start = read_process_start();
+}  // namespace
+
+void add_provenance(RunRecord& r, const Params& p) {
+  for (const auto& f : param_fields()) {
+    const ParamValue v = param_value(p, f);
+    if (auto* i = std::get_if<long long>(&v)) r.attrs[f.key] = *i;
+    else if (auto* d = std::get_if<double>(&v)) r.attrs[f.key] = *d;
+    else r.attrs[f.key] = std::get<std::string>(v);
+  }
+  r.attrs["git_sha"] = std::string(XB_GIT_SHA);
+  r.attrs["machine"] = machine_description();
+  r.attrs["omp_threads"] = static_cast<long long>(omp_get_max_threads());
+  r.attrs["omp_wait_policy"] = process_start.omp_wait_policy;
+  if (process_start.load_average >= 0) r.attrs["load_average"] = process_start.load_average;
+  r.attrs["cpu_count"] = process_start.cpu_count;
+  r.attrs["created"] = now_iso();
+}
+
+RunRecord make_simulation_record(const std::string& name, const Params& p, const std::string& method,
+                                 const RunResult& res) {
+  RunRecord r;
+  r.name = name;
+  add_provenance(r, p);
+  r.attrs["level"] = std::string("simulation");
+  r.attrs["scene"] = p.scene;
+  r.attrs["solver"] = method;
+  r.attrs["form_used"] = res.form_used;
+  r.attrs["profile"] = p.profile;
+  r.attrs["status"] = res.status;
+  r.attrs["message"] = res.message;
+  r.attrs["outer_iterations"] = res.outer_iterations;
+  r.attrs["final_dual_residual"] = res.final_dual_residual;
+  r.attrs["relative_dual_residual"] = res.relative_dual_residual;
+  r.attrs["wall_time"] = res.wall_time;
+  r.attrs["substeps_total"] = static_cast<long long>(res.substeps_total);
+  r.attrs["substeps_converged"] = static_cast<long long>(res.substeps_converged);
+  for (const auto& [k, v] : res.stats) r.attrs[k] = v;
+  for (const auto& [k, v] : res.arrays) r.datasets[k] = v;
+  const IterationLog& L = res.log;
+  r.datasets["frame"] = L.frame;
+  r.datasets["substep"] = L.substep;
+  r.datasets["iteration"] = L.iteration;
+  r.datasets["dual_residual"] = L.dual_residual;
+  r.datasets["relative_dual_residual"] = L.relative_dual_residual;
+  r.datasets["authors_dual_residual"] = L.authors_dual_residual;
+  r.datasets["authors_relative_dual_residual"] = L.authors_relative_dual_residual;
+  r.datasets["primal_residual"] = L.primal_residual;
+  r.datasets["energy"] = L.energy;
+  r.datasets["wall_time"] = L.wall_time;
+  r.datasets["step_time"] = L.step_time;
+  const MethodInfo* m = find_method(method);
+  if (m && !m->local) {
+    r.datasets["step_length"] = L.step_length;
+    r.datasets["linear_iterations"] = L.linear_iterations;
+    r.datasets["linear_setup_time"] = L.linear_setup_time;
+    r.datasets["linear_solve_time"] = L.linear_solve_time;
+    r.datasets["linear_relative_residual"] = L.linear_relative_residual;
+    r.datasets["linear_setup_action"] = L.linear_setup_action;
+    r.datasets["linear_history/residual"] = L.linear_history_residual;
+    r.datasets["linear_history/time"] = L.linear_history_time;
+    r.datasets["linear_history/offset"] = L.linear_history_offset;
+  }
+  if (!L.reference_status.empty()) {
+    // The reference of every substep (harness/reference.hpp) and the error against it.
+    r.attrs["reference_method"] = reference_method_description();
+    double worst = 0;
+    long long unconverged = 0;
+    for (size_t i = 0; i < L.reference_status.size(); ++i) {
+      worst = std::max(worst, L.reference_relative_dual_residual[i]);
+      if (L.reference_status[i] != "converged") ++unconverged;
+    }
+    r.attrs["reference_dual_residual"] = worst;
+    r.attrs["reference_substeps_unconverged"] = unconverged;
+    r.attrs["reference_time"] = res.reference_time;
+    r.datasets["position_error"] = L.position_error;
+    r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
+    r.datasets["reference/iterations"] = L.reference_iterations;
+    r.datasets["reference/status"] = L.reference_status;
+    if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
+  }
+  std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
+  r.datasets["final_positions"] = pos;
+  return r;
+}
+
+std::string run_name(int index, const std::string& scene, const std::string& solver) {
+  std::ostringstream os;
+  os << std::setw(4) << std::setfill('0') << index << "_" << scene << "_" << solver;
+  return os.str();
+}
+
+}  // namespace xb

@@ -1,0 +1,369 @@
+#include "system_io.hpp"
+
+#include "h5io.hpp"
+
+#include "../../problems/error.hpp"
+
+#include <hdf5.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace xb {
+
+namespace {
+
+using namespace h5;
+
+template <class T>
+void write_array(hid_t file, const char* name, const T* data, hsize_t n, hid_t type) {
+  H lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  H space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  H ds(H5Dcreate2(file, name, type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+  check(ds < 0 ? -1 : 0, std::string("create dataset ") + name);
+  if (n) check(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), std::string("write ") + name);
+}
+
+template <class T>
+std::vector<T> read_array(hid_t file, const std::string& path, const char* name, hid_t type) {
+  if (H5Lexists(file, name, H5P_DEFAULT) <= 0) {
+    // H5Lexists on "/A/indptr" fails when /A is missing; both mean the same here.
+    throw Error(path + ": not a captured system (no dataset " + name + ")");
+  }
+  H ds(H5Dopen2(file, name, H5P_DEFAULT), H5Dclose);
+  if (ds < 0) throw Error(path + ": cannot open dataset " + name);
+  H space(H5Dget_space(ds), H5Sclose);
+  if (H5Sget_simple_extent_ndims(space) != 1) throw Error(path + ": dataset " + std::string(name) + " is not 1-D");
+  std::vector<T> v(H5Sget_simple_extent_npoints(space));
+  if (!v.empty()) check(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), path + ": read " + name);
+  return v;
+}
+
+struct Silence {  // HDF5 prints error stacks by default; we report our own messages.
+  Silence() { silence_errors(); }
+};
+const Silence silence_hdf5;
+
+// Writes through NAME.tmp and renames, so that readers never see a partial file.
+void replace_atomically(const std::string& path, const std::string& tmp) {
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw Error("cannot rename " + tmp + " to " + path);
+  }
+}
+
+void make_parent(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) fs::create_directories(parent, ec);
+}
+
+// Reads the next line that is not a Matrix Market comment.
+bool next_data_line(std::istream& in, std::string& line, int& lineno) {
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line[0] == '%') continue;
+    return true;
+  }
+  return false;
+}
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Writes a text file through PATH.tmp (written by `body`, checked, renamed over PATH), so that
+// readers never see a partial file.
+void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body) {
+  make_parent(path);
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "w");
+  if (!f) throw Error("cannot create " + tmp);
+  body(f);
+  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  std::fclose(f);
+  if (!ok) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw Error("cannot write " + tmp);
+  }
+  replace_atomically(path, tmp);
+}
+
+}  // namespace
+
+std::string attr_text(const std::map<std::string, AttrValue>& attrs, const std::string& key) {
+  auto it = attrs.find(key);
+  if (it == attrs.end()) return "";
+  if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
+  if (auto* d = std::get_if<double>(&it->second)) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.17g", *d);
+    return b;
+  }
+  return std::get<std::string>(it->second);
+}
+
+SparseMatrix jacobian_csr(const ConstraintGraph& graph, const Gradients& grad) {
+  const int m = graph.num_constraints();
+  SparseMatrix J(m, 3 * graph.num_particles());
+  std::vector<Eigen::Triplet<double, int>> t;
+  t.reserve(12L * m);
+  for (int j = 0; j < m; ++j)
+    for (int s = 0; s < 4; ++s)
+      if (const int p = graph.particles[j][s]; p >= 0)
+        for (int d = 0; d < 3; ++d) t.emplace_back(j, 3 * p + d, grad[j][s][d]);
+  J.setFromTriplets(t.begin(), t.end());  // every entry stored, zeros included: the pattern is the topology
+  J.makeCompressed();
+  return J;
+}
+
+void jacobian_from_csr(const SparseMatrix& J, ConstraintGraph& graph, Gradients& grad) {
+  const int m = static_cast<int>(J.rows());
+  graph.particles.assign(m, {-1, -1, -1, -1});
+  grad.assign(m, {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+  for (int j = 0; j < m; ++j) {
+    int slot = -1;
+    for (SparseMatrix::InnerIterator it(J, j); it; ++it) {
+      const int p = static_cast<int>(it.col() / 3);
+      if (slot < 0 || graph.particles[j][slot] != p) {
+        if (++slot == 4) throw Error("J: row " + std::to_string(j) + " couples more than 4 particles");
+        graph.particles[j][slot] = p;
+      }
+      grad[j][slot][it.col() % 3] = it.value();
+    }
+  }
+}
+
+namespace {
+void write_csr(hid_t file, const std::string& group, const SparseMatrix& M) {
+  std::vector<long long> indptr(M.outerIndexPtr(), M.outerIndexPtr() + M.rows() + 1);
+  std::vector<long long> indices(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
+  write_array(file, (group + "/indptr").c_str(), indptr.data(), indptr.size(), H5T_NATIVE_LLONG);
+  write_array(file, (group + "/indices").c_str(), indices.data(), indices.size(), H5T_NATIVE_LLONG);
+  write_array(file, (group + "/data").c_str(), M.valuePtr(), static_cast<hsize_t>(M.nonZeros()), H5T_NATIVE_DOUBLE);
+}
+
+// A CSR matrix of `rows` × `cols` from /G/indptr, /G/indices, /G/data, every array checked.
+SparseMatrix read_csr(hid_t file, const std::string& path, const std::string& g, long long rows, long long cols) {
+  const auto indptr = read_array<long long>(file, path, (g + "/indptr").c_str(), H5T_NATIVE_LLONG);
+  const auto indices = read_array<long long>(file, path, (g + "/indices").c_str(), H5T_NATIVE_LLONG);
+  const auto data = read_array<double>(file, path, (g + "/data").c_str(), H5T_NATIVE_DOUBLE);
+  if (static_cast<long long>(indptr.size()) != rows + 1)
+    throw Error(path + ": " + g + "/indptr has " + std::to_string(indptr.size()) + " entries, expected rows + 1 = " +
+                std::to_string(rows + 1));
+  if (indices.size() != data.size() || indptr.front() != 0 || indptr.back() != static_cast<long long>(data.size()))
+    throw Error(path + ": " + g + "/indptr, " + g + "/indices and " + g + "/data are inconsistent");
+  if (rows > 2147483647LL || cols > 2147483647LL || static_cast<long long>(data.size()) > 2147483647LL)
+    throw Error(path + ": " + g + " too large for 32-bit indices");
+  // Every row's range is checked before any entry is read: a row pointer past the arrays
+  // must be reported as what it is, not as a bad index somewhere else.
+  for (long long i = 0; i < rows; ++i)
+    if (indptr[i + 1] < indptr[i] || indptr[i + 1] > static_cast<long long>(data.size()))
+      throw Error(path + ": " + g + "/indptr is not non-decreasing within [0, " + std::to_string(data.size()) +
+                  "] at row " + std::to_string(i));
+  SparseMatrix M(rows, cols);
+  M.resizeNonZeros(static_cast<long>(data.size()));
+  for (long long i = 0; i <= rows; ++i) M.outerIndexPtr()[i] = static_cast<int>(indptr[i]);
+  for (long long i = 0; i < rows; ++i) {
+    for (long long k = indptr[i]; k < indptr[i + 1]; ++k) {
+      if (indices[k] < 0 || indices[k] >= cols || (k > indptr[i] && indices[k] <= indices[k - 1]))
+        throw Error(path + ": " + g + "/indices out of range or unsorted in row " + std::to_string(i));
+      M.innerIndexPtr()[k] = static_cast<int>(indices[k]);
+      M.valuePtr()[k] = data[k];
+    }
+  }
+  return M;
+}
+}  // namespace
+
+void write_system_h5(const std::string& path, const CapturedSystem& sys) {
+  const SparseMatrix& A = sys.A;
+  const Vector& b = sys.b;
+  if (A.rows() != A.cols() || A.rows() != b.size()) throw Error("write_system_h5: A is not square or b has the wrong size");
+  if (!A.isCompressed()) throw Error("write_system_h5: A must be compressed");
+  make_parent(path);
+  const std::string tmp = path + ".tmp";
+  {
+    H file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    if (file < 0) throw Error("cannot create " + tmp);
+    try {
+      const long long n = A.rows(), nnz = A.nonZeros();
+      write_csr(file, "/A", A);
+      write_array(file, "/b", b.data(), static_cast<hsize_t>(n), H5T_NATIVE_DOUBLE);
+      if (sys.has_primal()) {
+        write_csr(file, "/J", jacobian_csr(sys.graph, sys.grad));
+        const auto& w = sys.graph.w;
+        write_array(file, "/inverse_mass", w.data(), static_cast<hsize_t>(w.size()), H5T_NATIVE_DOUBLE);
+        write_array(file, "/alpha_tilde", sys.alpha_tilde.data(), static_cast<hsize_t>(sys.alpha_tilde.size()), H5T_NATIVE_DOUBLE);
+        write_array(file, "/positions", sys.x.data(), static_cast<hsize_t>(sys.x.size()), H5T_NATIVE_DOUBLE);
+      }
+      for (const auto& [k, v] : sys.attrs) write_attr(file, k, v);
+      write_attr(file, "kind", std::string("dual_system"));
+      write_attr(file, "generator", std::string("xpbd-bench"));
+      write_attr(file, "rows", n);
+      write_attr(file, "nnz", nnz);
+      check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
+    } catch (...) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw;
+    }
+  }
+  replace_atomically(path, tmp);
+}
+
+CapturedSystem read_system_h5(const std::string& path) {
+  if (!fs::exists(path)) throw Error(path + ": no such file");
+  H file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (file < 0) throw Error(path + ": not an HDF5 file");
+  CapturedSystem s;
+  H root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
+  H5O_info_t oi;
+  check(H5Oget_info2(root, &oi, H5O_INFO_NUM_ATTRS), path + ": root info");
+  for (hsize_t a = 0; a < oi.num_attrs; ++a) {
+    H attr(H5Aopen_by_idx(root, ".", H5_INDEX_NAME, H5_ITER_INC, a, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+    char an[1024];
+    H5Aget_name(attr, sizeof an, an);
+    s.attrs[an] = read_attr(attr);
+  }
+  if (attr_text(s.attrs, "kind") != "dual_system")
+    throw Error(path + ": not a captured system (attribute kind = \"dual_system\" missing; write one with `xpbd-bench capture`)");
+  if (H5Lexists(file, "/A", H5P_DEFAULT) <= 0) throw Error(path + ": not a captured system (no group /A)");
+  const auto b = read_array<double>(file, path, "/b", H5T_NATIVE_DOUBLE);
+  const long long n = static_cast<long long>(b.size());
+  s.A = read_csr(file, path, "/A", n, n);
+  s.b = Eigen::Map<const Vector>(b.data(), n);
+  if (H5Lexists(file, "/J", H5P_DEFAULT) > 0) {
+    const auto w = read_array<double>(file, path, "/inverse_mass", H5T_NATIVE_DOUBLE);
+    const auto at = read_array<double>(file, path, "/alpha_tilde", H5T_NATIVE_DOUBLE);
+    const auto x = read_array<double>(file, path, "/positions", H5T_NATIVE_DOUBLE);
+    const long long np = static_cast<long long>(w.size());
+    if (static_cast<long long>(at.size()) != n) throw Error(path + ": /alpha_tilde has " + std::to_string(at.size()) + " entries, expected rows = " + std::to_string(n));
+    if (static_cast<long long>(x.size()) != 3 * np) throw Error(path + ": /positions has " + std::to_string(x.size()) + " entries, expected 3 x particles = " + std::to_string(3 * np));
+    jacobian_from_csr(read_csr(file, path, "/J", n, 3 * np), s.graph, s.grad);
+    s.graph.w = Eigen::Map<const Eigen::VectorXd>(w.data(), np);
+    s.alpha_tilde = Eigen::Map<const Eigen::VectorXd>(at.data(), n);
+    s.x = Eigen::Map<const Eigen::Matrix3Xd>(x.data(), 3, np);
+  }
+  return s;
+}
+
+void write_matrix_market(const std::string& path, const SparseMatrix& A) {
+  write_text_atomically(path, [&](std::FILE* f) {
+    long long lower_nnz = 0;
+    for (int i = 0; i < A.outerSize(); ++i)
+      for (SparseMatrix::InnerIterator it(A, i); it; ++it)
+        if (it.col() <= i) ++lower_nnz;
+    std::fprintf(f, "%%%%MatrixMarket matrix coordinate real symmetric\n");
+    std::fprintf(f, "%% xpbd-bench symmetric system matrix (lower triangle, 1-based)\n");
+    std::fprintf(f, "%lld %lld %lld\n", static_cast<long long>(A.rows()), static_cast<long long>(A.cols()), lower_nnz);
+    for (int i = 0; i < A.outerSize(); ++i)
+      for (SparseMatrix::InnerIterator it(A, i); it; ++it)
+        if (it.col() <= i) std::fprintf(f, "%d %d %.17g\n", i + 1, static_cast<int>(it.col()) + 1, it.value());
+  });
+}
+
+void write_matrix_market(const std::string& path, const Vector& b) {
+  write_text_atomically(path, [&](std::FILE* f) {
+    std::fprintf(f, "%%%%MatrixMarket matrix array real general\n");
+    std::fprintf(f, "%% xpbd-bench dual system right-hand side b\n");
+    std::fprintf(f, "%lld 1\n", static_cast<long long>(b.size()));
+    for (long i = 0; i < b.size(); ++i) std::fprintf(f, "%.17g\n", b[i]);
+  });
+}
+
+SparseMatrix read_matrix_market_matrix(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open");
+  std::string header;
+  std::getline(in, header);
+  const std::string h = lower(header);
+  if (h.rfind("%%matrixmarket matrix coordinate real", 0) != 0)
+    throw Error(path + ":1: expected '%%MatrixMarket matrix coordinate real ...'");
+  const bool symmetric = h.find("symmetric") != std::string::npos;
+  if (!symmetric && h.find("general") == std::string::npos) throw Error(path + ":1: only symmetric or general matrices");
+  std::string line;
+  int lineno = 1;
+  if (!next_data_line(in, line, lineno)) throw Error(path + ": missing size line");
+  long long rows = 0, cols = 0, nnz = 0;
+  if (std::sscanf(line.c_str(), "%lld %lld %lld", &rows, &cols, &nnz) != 3 || rows < 0 || cols < 0 || nnz < 0)
+    throw Error(path + ":" + std::to_string(lineno) + ": bad size line");
+  std::vector<Eigen::Triplet<double, int>> t;
+  t.reserve(symmetric ? 2 * nnz : nnz);
+  for (long long k = 0; k < nnz; ++k) {
+    if (!next_data_line(in, line, lineno)) throw Error(path + ": expected " + std::to_string(nnz) + " entries, file ends after " + std::to_string(k));
+    long long i = 0, j = 0;
+    double v = 0;
+    char* end = nullptr;
+    if (std::sscanf(line.c_str(), "%lld %lld", &i, &j) != 2) throw Error(path + ":" + std::to_string(lineno) + ": bad entry");
+    // The value with strtod (exact round trip of %.17g).
+    const char* p = line.c_str();
+    for (int field = 0; field < 2; ++field) {
+      while (*p == ' ' || *p == '\t') ++p;
+      while (*p && *p != ' ' && *p != '\t') ++p;
+    }
+    v = std::strtod(p, &end);
+    if (end == p || i < 1 || j < 1 || i > rows || j > cols)
+      throw Error(path + ":" + std::to_string(lineno) + ": bad entry");
+    t.emplace_back(static_cast<int>(i - 1), static_cast<int>(j - 1), v);
+    if (symmetric && i != j) t.emplace_back(static_cast<int>(j - 1), static_cast<int>(i - 1), v);
+  }
+  SparseMatrix A(rows, cols);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  return A;
+}
+
+Vector read_matrix_market_vector(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open");
+  std::string header;
+  std::getline(in, header);
+  if (lower(header).rfind("%%matrixmarket matrix array real general", 0) != 0)
+    throw Error(path + ":1: expected '%%MatrixMarket matrix array real general'");
+  std::string line;
+  int lineno = 1;
+  if (!next_data_line(in, line, lineno)) throw Error(path + ": missing size line");
+  long long rows = 0, cols = 0;
+  if (std::sscanf(line.c_str(), "%lld %lld", &rows, &cols) != 2 || rows < 0 || cols != 1)
+    throw Error(path + ":" + std::to_string(lineno) + ": expected 'N 1'");
+  Vector b(rows);
+  for (long long k = 0; k < rows; ++k) {
+    if (!next_data_line(in, line, lineno)) throw Error(path + ": expected " + std::to_string(rows) + " values");
+    char* end = nullptr;
+    b[k] = std::strtod(line.c_str(), &end);
+    if (end == line.c_str()) throw Error(path + ":" + std::to_string(lineno) + ": bad value");
+  }
+  return b;
+}
+
+std::vector<std::string> write_captured_system(const std::string& prefix, const CapturedSystem& sys) {
+  std::vector<std::string> written = {prefix + ".h5", prefix + "_A.mtx", prefix + "_b.mtx"};
+  write_matrix_market(prefix + "_A.mtx", sys.A);
+  write_matrix_market(prefix + "_b.mtx", sys.b);
+  if (sys.has_primal() && (sys.alpha_tilde.array() > 0).all()) {
+    PrimalSystem ps(sys.graph);
+    ps.fill(sys.grad, sys.alpha_tilde);
+    Vector f;
+    ps.rhs(sys.grad, sys.alpha_tilde, sys.b, f);
+    write_matrix_market(prefix + "_K.mtx", ps.K());
+    write_matrix_market(prefix + "_f.mtx", f);
+    written.insert(written.end(), {prefix + "_K.mtx", prefix + "_f.mtx"});
+  }
+  write_system_h5(prefix + ".h5", sys);
+  return written;
+}
+
+}  // namespace xb

@@ -1,0 +1,20 @@
+// The one way a system is captured from a scene (used by `capture`, the perf metrics, the
+// benchmarks and the tests): run a global method until the outer iteration asked for is about
+// to be solved, and keep its dual system with the data of its primal form.
+#pragma once
+
+#include "../io/system_io.hpp"
+
+#include "../../problems/params.hpp"
+
+#include <string>
+
+namespace xb {
+
+// Runs `driver` (a global method; cholmod by default elsewhere, so that the system does not depend
+// on the solver under test) on the scene of `p` until the system of (frame, substep, iteration)
+// is assembled, and returns it; p.frames is raised to reach the frame. Throws xb::Error saying
+// where the run stopped if it never gets there.
+CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration);
+
+}  // namespace xb

@@ -1,0 +1,106 @@
+// The stepper: Algorithm 4 of the supplemental, with any method in the inner step.
+//   per substep: v += h·g; x̃ = x + h·v; x = x̃; λ = 0
+//     repeat: C, ∇C at x → dual residual ‖C + α̃λ‖ (logged) → stop? → method step
+//             (local sweep, or A Δλ = b with b = −(C + α̃λ) in the dual or the primal form
+//             (Params::form); λ += Δλ; x += ω M⁻¹∇CᵀΔλ)
+//             → collisions (if the scene has colliders)
+//     v = (x − x_old)/h
+// A failed run is a result (its status), never a crash.
+#pragma once
+
+#include "../../problems/params.hpp"
+#include "../../problems/problem.hpp"
+#include "../../problems/sparse.hpp"
+#include "../io/state_io.hpp"
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace xb {
+
+// Per outer iteration: one entry each time the dual residual is evaluated (iteration 0 is the
+// predicted state, before any step). The linear_* entries describe the step that *led* to this
+// state (zero at iteration 0 and for local methods).
+struct IterationLog {
+  std::vector<long long> frame, substep, iteration;
+  std::vector<double> dual_residual;           // ‖C + α̃λ‖₂
+  std::vector<double> relative_dual_residual;  // over the substep's iteration 0
+  // The dual residual as the authors' code logs it (never the true one after iteration 0):
+  //  - local methods (xpbd-*): ‖C(x̃) + α̃λ_k‖, C evaluated once, at the substep's predicted x̃;
+  //  - global methods: ‖C(x_{k−1}) + α̃λ_k‖, C of the state before step k, λ after it.
+  // Equal to dual_residual at iteration 0. The relative one is over that same iteration-0 value.
+  std::vector<double> authors_dual_residual, authors_relative_dual_residual;
+  std::vector<double> primal_residual;         // ‖M(x − x̃) − ∇Cᵀλ‖₂ over free particles
+  std::vector<double> energy;                  // ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) (α > 0)
+  std::vector<double> wall_time;               // s since the substep began
+  std::vector<double> step_time;               // s in the method step (assembly + setup + solve, or sweep)
+  // Global methods: the step length of the step that led here (ω for step = fixed, the line
+  // search's t for step = line_search); 0 at iteration 0 and for local methods.
+  std::vector<double> step_length;
+  std::vector<long long> linear_iterations;
+  std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
+  std::vector<std::string> linear_setup_action;
+  // Residual histories of every linear solve, concatenated; solve k of entry i owns
+  // [linear_history_offset[i], linear_history_offset[i+1]).
+  std::vector<double> linear_history_residual, linear_history_time;
+  std::vector<long long> linear_history_offset{0};
+  // With RunOptions::reference only: per entry ‖x − x_ref‖_M / ‖x_ref − x̃‖_M (x_ref from
+  // harness/reference.hpp, recomputed every substep from the run's own x̃), and per substep
+  // what the reference reached.
+  std::vector<double> position_error;
+  std::vector<double> reference_relative_dual_residual;
+  std::vector<long long> reference_iterations;
+  std::vector<std::string> reference_status;
+};
+
+struct RunResult {
+  std::string status = "ok";  // ok | max_iterations | diverged | nan | breakdown | timeout | error
+  std::string message;
+  std::string form_used;      // dual | primal for global methods, none for local sweeps
+  IterationLog log;
+  long long outer_iterations = 0;   // method steps over all substeps
+  double final_dual_residual = 0;   // of the last evaluation
+  double relative_dual_residual = 0;
+  double wall_time = 0;             // s, the whole run (without the reference's time)
+  double reference_time = 0;        // s spent on references and errors (excluded from every clock)
+  int substeps_converged = 0, substeps_total = 0;
+  std::map<std::string, double> stats;                     // solver statistics (+ run extras)
+  std::map<std::string, std::vector<double>> arrays;       // per-level and similar arrays
+  Eigen::Matrix3Xd final_positions;
+};
+
+// One global outer iteration's linear step, as `capture` sees it: the dual system (A is filled
+// in either form) and what the primal form is built from.
+struct SystemView {
+  int frame, substep, iteration;
+  const SparseMatrix& A;
+  const Vector& b;
+  const ConstraintState& state;
+  const Eigen::VectorXd& alpha_tilde;
+  const Eigen::Matrix3Xd& x;
+};
+
+struct RunOptions {
+  double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
+  // Solve every substep also by the reference method (harness/reference.hpp) and log the
+  // position error per outer iteration. Its time is excluded from wall_time and time_budget.
+  bool reference = false;
+  // Called with the system of every global outer iteration before it is solved; returning true
+  // ends the run (used by `capture`).
+  std::function<bool(const SystemView&)> on_system;
+  // Called after every frame with the positions (for mesh output).
+  std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
+  // Called after every frame with the state the next frame starts from (for --save-state).
+  std::function<void(const SimState&)> on_state;
+  // Start from this state (positions, velocities; frames numbered from its frame) instead of
+  // the scene's start. Its particle count must match the problem's.
+  const SimState* initial_state = nullptr;
+};
+
+// Runs `method` (a name from methods()) on a copy of `prob`. Never throws for a numerical
+// failure; throws xb::Error for a bad method name.
+RunResult run_simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt = {});
+
+}  // namespace xb
