@@ -35,10 +35,10 @@ struct Params {
   double atol = 1e-12;               // or when ‖C+α̃λ‖ ≤ atol
   double omega = 1.0;                // global step x += ω M⁻¹∇CᵀΔλ (paper's code: 0.1 soft, 0.25 cloth)
   // Which dual residual the stop test (rtol/atol) reads: true ‖C(x_k) + α̃λ_k‖ | authors (the
-  // quantity the authors' code logs, harness/stepper.hpp: IterationLog::authors_dual_residual).
+  // quantity the authors' code logs, harness/sim/stepper.hpp: IterationLog::authors_dual_residual).
   std::string residual_metric = "true";
   // Global step: fixed (x += ω M⁻¹∇CᵀΔλ, λ += Δλ) | line_search (the authors' backtracking on the
-  // dual residual, harness/line_search.hpp; ω unused).
+  // dual residual, harness/sim/line_search.hpp; ω unused).
   std::string step = "fixed";
   double position_relaxation = 0.1;  // xpbd-authors: x += this·M⁻¹∇CᵀΔλ while λ takes the full Δλ
   double jacobi_relaxation = 0;      // xpbd-jacobi: λ += ωJ·Δλ, x += ωJ·M⁻¹∇CᵀΔλ; 0 = 1/(most constraints on one particle)
@@ -78,7 +78,7 @@ struct Params {
   int muelu_smoother_sweeps = 1;
   int muelu_coarse_size = 400;
   std::string muelu_reuse = "RP";  // none | tP | RP: MueLu "reuse: type" for Values setups
-  // The profile the parameters came from ("" = none; harness/profile.hpp). Not a key of the field
+  // The profile the parameters came from ("" = none; harness/cli/profile.hpp). Not a key of the field
   // table (a profile is a set of keys, not one): simulation runs record it as the attribute `profile`.
   std::string profile;
 };
