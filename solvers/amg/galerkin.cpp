@@ -104,16 +104,14 @@ void GalerkinProduct::refresh(const SparseMatrix& R, const SparseMatrix& A, cons
   spgemm_values(R, AP_, Ac);
 }
 
-void AggregateGalerkin::build(const SparseMatrix& A, const SparseMatrix& P, const SparseMatrix& R, SparseMatrix& Ac) {
-  const int n = static_cast<int>(A.rows()), nc = static_cast<int>(P.cols());
-  if (P.rows() != n || R.rows() != nc || R.cols() != n) throw Error("aggregate Galerkin: P, R and A do not fit");
-  const int *ao = A.outerIndexPtr(), *acol = A.innerIndexPtr();
+namespace {
+// agg(i) and p_i from P's rows (at most one entry each; a row without one is agg −1).
+void aggregate_of_rows(const SparseMatrix& P, std::vector<int>& agg, std::vector<double>& p) {
+  const int n = static_cast<int>(P.rows());
   const int *po = P.outerIndexPtr(), *pcol = P.innerIndexPtr();
   const double* pval = P.valuePtr();
-  const int *ro = R.outerIndexPtr(), *rcol = R.innerIndexPtr();
-  // agg(i) and p_i from P's rows.
-  std::vector<int> agg(n, -1);
-  std::vector<double> p(n, 0.0);
+  agg.assign(n, -1);
+  p.assign(n, 0.0);
   int bad = 0;
 #pragma omp parallel for schedule(static) reduction(+ : bad)
   for (int i = 0; i < n; ++i) {
@@ -125,10 +123,29 @@ void AggregateGalerkin::build(const SparseMatrix& A, const SparseMatrix& P, cons
     }
   }
   if (bad) throw Error("aggregate Galerkin: P has rows with more than one entry (use the general product)");
+}
 
-  // Per coarse row I: its sorted columns and, per column, the fine non-zeros adding into it.
-  std::vector<std::vector<int>> rcols(nc), rcount(nc), rsrc(nc);
-  std::vector<std::vector<double>> rw(nc);
+// Per coarse row I: its sorted columns and, per column (count[q] .. count[q+1]), the fine
+// non-zeros adding into it (src) with their weights p_i p_j (w).
+struct CoarseRows {
+  std::vector<std::vector<int>> cols, count, src;
+  std::vector<std::vector<double>> w;
+};
+
+CoarseRows gather_coarse_rows(const SparseMatrix& A, const SparseMatrix& R, const std::vector<int>& agg,
+                              const std::vector<double>& p) {
+  const int nc = static_cast<int>(R.rows());
+  const int *ao = A.outerIndexPtr(), *acol = A.innerIndexPtr();
+  const int *ro = R.outerIndexPtr(), *rcol = R.innerIndexPtr();
+  CoarseRows rows;
+  auto& rcols = rows.cols;
+  auto& rcount = rows.count;
+  auto& rsrc = rows.src;
+  auto& rw = rows.w;
+  rcols.resize(nc);
+  rcount.resize(nc);
+  rsrc.resize(nc);
+  rw.resize(nc);
 #pragma omp parallel
   {
     std::vector<int> pos(nc, -1);
@@ -175,6 +192,21 @@ void AggregateGalerkin::build(const SparseMatrix& A, const SparseMatrix& P, cons
       for (int J : cols) pos[J] = -1;
     }
   }
+  return rows;
+}
+}  // namespace
+
+void AggregateGalerkin::build(const SparseMatrix& A, const SparseMatrix& P, const SparseMatrix& R, SparseMatrix& Ac) {
+  const int n = static_cast<int>(A.rows()), nc = static_cast<int>(P.cols());
+  if (P.rows() != n || R.rows() != nc || R.cols() != n) throw Error("aggregate Galerkin: P, R and A do not fit");
+  std::vector<int> agg;
+  std::vector<double> p;
+  aggregate_of_rows(P, agg, p);
+  const CoarseRows rows = gather_coarse_rows(A, R, agg, p);
+  const auto& rcols = rows.cols;
+  const auto& rcount = rows.count;
+  const auto& rsrc = rows.src;
+  const auto& rw = rows.w;
   // Concatenate into A_c's CSR and the flat map.
   std::vector<int> rowptr(nc + 1, 0), contrib(nc + 1, 0);
   for (int I = 0; I < nc; ++I) {

@@ -7,54 +7,65 @@
 
 namespace xb::amg {
 
-Tentative tentative_prolongator(const Aggregates& agg, const Eigen::MatrixXd& B, double drop_tol) {
-  const int n = static_cast<int>(agg.aggregate.size());
-  const int na = agg.num_aggregates;
-  const int K = static_cast<int>(B.cols());
-  if (B.rows() != n) throw Error("tentative prolongator: candidates have " + std::to_string(B.rows()) + " rows, matrix " + std::to_string(n));
-  if (K < 1) throw Error("tentative prolongator: no candidate vectors");
+namespace {
 
-  // Members of each aggregate in row order (a counting sort: O(n), sequential).
-  std::vector<int> mstart(na + 1, 0), members, local(n, -1);
+// Per aggregate: its members in row order and their thin QR, Q column-major at
+// q[start[a]*K ...], R (K × K, column-major) at r[a*K*K ...], `cols` columns kept.
+struct AggregateQR {
+  int K = 0;
+  std::vector<int> start, members, local;  // local[i]: row i's position within its aggregate
+  std::vector<double> q, r;
+  std::vector<int> cols;
+  int size(int a) const { return start[a + 1] - start[a]; }
+  const double* Q(int a) const { return q.data() + static_cast<size_t>(start[a]) * K; }
+};
+
+// Members of each aggregate in row order (a counting sort: O(n), sequential).
+void collect_members(const Aggregates& agg, AggregateQR& qr) {
+  const int n = static_cast<int>(agg.aggregate.size()), na = agg.num_aggregates;
+  qr.start.assign(na + 1, 0);
+  qr.local.assign(n, -1);
   for (int i = 0; i < n; ++i)
-    if (agg.aggregate[i] >= 0) ++mstart[agg.aggregate[i] + 1];
-  for (int a = 0; a < na; ++a) mstart[a + 1] += mstart[a];
-  members.resize(mstart[na]);
-  {
-    std::vector<int> pos(mstart.begin(), mstart.end() - 1);
-    for (int i = 0; i < n; ++i) {
-      const int a = agg.aggregate[i];
-      if (a < 0) continue;
-      local[i] = pos[a] - mstart[a];
-      members[pos[a]++] = i;
-    }
+    if (agg.aggregate[i] >= 0) ++qr.start[agg.aggregate[i] + 1];
+  for (int a = 0; a < na; ++a) qr.start[a + 1] += qr.start[a];
+  qr.members.resize(qr.start[na]);
+  std::vector<int> pos(qr.start.begin(), qr.start.end() - 1);
+  for (int i = 0; i < n; ++i) {
+    const int a = agg.aggregate[i];
+    if (a < 0) continue;
+    qr.local[i] = pos[a] - qr.start[a];
+    qr.members[pos[a]++] = i;
   }
+}
 
-  // Per aggregate, modified Gram–Schmidt with one re-orthogonalisation (stable for the few
-  // columns we have). Q is stored column-major per aggregate at qbuf[mstart[a]*K ...].
-  std::vector<double> qbuf(static_cast<size_t>(mstart[na]) * K, 0.0), rbuf(static_cast<size_t>(na) * K * K, 0.0);
-  std::vector<int> ncols(na, 0);
+// Per aggregate, modified Gram–Schmidt with one re-orthogonalisation (stable for the few
+// columns we have); a column whose remainder is below drop_tol of its norm is dropped.
+void orthonormalise(const Eigen::MatrixXd& B, double drop_tol, AggregateQR& qr) {
+  const int na = static_cast<int>(qr.start.size()) - 1, K = qr.K;
+  qr.q.assign(static_cast<size_t>(qr.start[na]) * K, 0.0);
+  qr.r.assign(static_cast<size_t>(na) * K * K, 0.0);
+  qr.cols.assign(na, 0);
 #pragma omp parallel for schedule(dynamic, 64)
   for (int a = 0; a < na; ++a) {
-    const int m = mstart[a + 1] - mstart[a];
-    double* Q = qbuf.data() + static_cast<size_t>(mstart[a]) * K;  // m × K, column c at Q + c*m
-    double* Rm = rbuf.data() + static_cast<size_t>(a) * K * K;       // K × K column-major
+    const int m = qr.size(a);
+    double* Q = qr.q.data() + static_cast<size_t>(qr.start[a]) * K;  // m × K, column c at Q + c*m
+    double* Rm = qr.r.data() + static_cast<size_t>(a) * K * K;       // K × K column-major
     std::vector<double> v(m);
     int kept = 0;
     for (int c = 0; c < K; ++c) {
       double orig = 0;
       for (int t = 0; t < m; ++t) {
-        v[t] = B(members[mstart[a] + t], c);
+        v[t] = B(qr.members[qr.start[a] + t], c);
         orig += v[t] * v[t];
       }
       orig = std::sqrt(orig);
       for (int pass = 0; pass < 2; ++pass)
-        for (int q = 0; q < kept; ++q) {
-          const double* Qq = Q + static_cast<size_t>(q) * m;
+        for (int k = 0; k < kept; ++k) {
+          const double* Qk = Q + static_cast<size_t>(k) * m;
           double r = 0;
-          for (int t = 0; t < m; ++t) r += Qq[t] * v[t];
-          for (int t = 0; t < m; ++t) v[t] -= r * Qq[t];
-          Rm[q + c * K] += r;
+          for (int t = 0; t < m; ++t) r += Qk[t] * v[t];
+          for (int t = 0; t < m; ++t) v[t] -= r * Qk[t];
+          Rm[k + c * K] += r;
         }
       double nv = 0;
       for (int t = 0; t < m; ++t) nv += v[t] * v[t];
@@ -66,18 +77,17 @@ Tentative tentative_prolongator(const Aggregates& agg, const Eigen::MatrixXd& B,
         ++kept;
       }
     }
-    ncols[a] = kept;
+    qr.cols[a] = kept;
   }
+}
 
-  Tentative T;
-  T.col_start.assign(na + 1, 0);
-  for (int a = 0; a < na; ++a) T.col_start[a + 1] = T.col_start[a] + ncols[a];
-  const int nc = T.col_start[na];
-
-  // P: row i of aggregate a holds row local[i] of Q_a at columns col_start[a] ...
+// P: row i of aggregate a holds row local[i] of Q_a at columns col_start[a] ...
+void assemble_P(const Aggregates& agg, const AggregateQR& qr, Tentative& T) {
+  const int n = static_cast<int>(agg.aggregate.size());
+  const int nc = T.col_start.back();
   std::vector<int> rowptr(n + 1, 0);
 #pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i) rowptr[i + 1] = agg.aggregate[i] >= 0 ? ncols[agg.aggregate[i]] : 0;
+  for (int i = 0; i < n; ++i) rowptr[i + 1] = agg.aggregate[i] >= 0 ? qr.cols[agg.aggregate[i]] : 0;
   for (int i = 0; i < n; ++i) rowptr[i + 1] += rowptr[i];
   T.P.resize(n, nc);
   T.P.resizeNonZeros(rowptr[n]);
@@ -89,21 +99,23 @@ Tentative tentative_prolongator(const Aggregates& agg, const Eigen::MatrixXd& B,
   for (int i = 0; i < n; ++i) {
     const int a = agg.aggregate[i];
     if (a < 0) continue;
-    const int m = mstart[a + 1] - mstart[a];
-    const double* Q = qbuf.data() + static_cast<size_t>(mstart[a]) * K;
-    for (int q = 0; q < ncols[a]; ++q) {
-      pc[rowptr[i] + q] = T.col_start[a] + q;
-      pv[rowptr[i] + q] = Q[static_cast<size_t>(q) * m + local[i]];
+    for (int k = 0; k < qr.cols[a]; ++k) {
+      pc[rowptr[i] + k] = T.col_start[a] + k;
+      pv[rowptr[i] + k] = qr.Q(a)[static_cast<size_t>(k) * qr.size(a) + qr.local[i]];
     }
-    maxrow = std::max(maxrow, ncols[a]);
+    maxrow = std::max(maxrow, qr.cols[a]);
   }
   T.max_row_entries = maxrow;
+}
 
-  // R = Pᵀ: coarse row col_start[a] + q holds column q of Q_a over the members (sorted rows).
+// R = Pᵀ (coarse row col_start[a] + k holds column k of Q_a over the members, sorted rows) and
+// the coarse candidates, the stacked R_a.
+void assemble_R_and_coarse_candidates(int n, const AggregateQR& qr, Tentative& T) {
+  const int na = static_cast<int>(qr.cols.size()), nc = T.col_start.back(), K = qr.K;
   std::vector<int> rptr(nc + 1, 0);
 #pragma omp parallel for schedule(static)
   for (int a = 0; a < na; ++a)
-    for (int q = 0; q < ncols[a]; ++q) rptr[T.col_start[a] + q + 1] = mstart[a + 1] - mstart[a];
+    for (int k = 0; k < qr.cols[a]; ++k) rptr[T.col_start[a] + k + 1] = qr.size(a);
   for (int c = 0; c < nc; ++c) rptr[c + 1] += rptr[c];
   T.R.resize(nc, n);
   T.R.resizeNonZeros(rptr[nc]);
@@ -113,18 +125,35 @@ Tentative tentative_prolongator(const Aggregates& agg, const Eigen::MatrixXd& B,
   T.B_coarse.setZero(nc, K);
 #pragma omp parallel for schedule(dynamic, 64)
   for (int a = 0; a < na; ++a) {
-    const int m = mstart[a + 1] - mstart[a];
-    const double* Q = qbuf.data() + static_cast<size_t>(mstart[a]) * K;
-    const double* Rm = rbuf.data() + static_cast<size_t>(a) * K * K;
-    for (int q = 0; q < ncols[a]; ++q) {
-      const int c = T.col_start[a] + q;
+    const int m = qr.size(a);
+    const double* Rm = qr.r.data() + static_cast<size_t>(a) * K * K;
+    for (int k = 0; k < qr.cols[a]; ++k) {
+      const int c = T.col_start[a] + k;
       for (int t = 0; t < m; ++t) {
-        rc[rptr[c] + t] = members[mstart[a] + t];
-        rv[rptr[c] + t] = Q[static_cast<size_t>(q) * m + t];
+        rc[rptr[c] + t] = qr.members[qr.start[a] + t];
+        rv[rptr[c] + t] = qr.Q(a)[static_cast<size_t>(k) * m + t];
       }
-      for (int k = 0; k < K; ++k) T.B_coarse(c, k) = Rm[q + k * K];
+      for (int j = 0; j < K; ++j) T.B_coarse(c, j) = Rm[k + j * K];
     }
   }
+}
+
+}  // namespace
+
+Tentative tentative_prolongator(const Aggregates& agg, const Eigen::MatrixXd& B, double drop_tol) {
+  const int n = static_cast<int>(agg.aggregate.size());
+  const int na = agg.num_aggregates;
+  AggregateQR qr;
+  qr.K = static_cast<int>(B.cols());
+  if (B.rows() != n) throw Error("tentative prolongator: candidates have " + std::to_string(B.rows()) + " rows, matrix " + std::to_string(n));
+  if (qr.K < 1) throw Error("tentative prolongator: no candidate vectors");
+  collect_members(agg, qr);
+  orthonormalise(B, drop_tol, qr);
+  Tentative T;
+  T.col_start.assign(na + 1, 0);
+  for (int a = 0; a < na; ++a) T.col_start[a + 1] = T.col_start[a] + qr.cols[a];
+  assemble_P(agg, qr, T);
+  assemble_R_and_coarse_candidates(n, qr, T);
   return T;
 }
 
