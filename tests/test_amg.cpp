@@ -16,102 +16,16 @@
 #include "solvers/linear_solver.hpp"
 #include "solvers/pcg.hpp"
 
+#include "amg_test_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
 using namespace xb;
 using namespace xb::amg;
+using namespace xb::test;
 
-namespace {
-
-SparseMatrix poisson2d(int n) {
-  std::vector<Eigen::Triplet<double>> t;
-  auto id = [n](int i, int j) { return i * n + j; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      t.emplace_back(id(i, j), id(i, j), 4.0);
-      if (i > 0) t.emplace_back(id(i, j), id(i - 1, j), -1.0);
-      if (i + 1 < n) t.emplace_back(id(i, j), id(i + 1, j), -1.0);
-      if (j > 0) t.emplace_back(id(i, j), id(i, j - 1), -1.0);
-      if (j + 1 < n) t.emplace_back(id(i, j), id(i, j + 1), -1.0);
-    }
-  SparseMatrix A(n * n, n * n);
-  A.setFromTriplets(t.begin(), t.end());
-  return A;
-}
-
-SparseMatrix poisson3d(int n) {
-  std::vector<Eigen::Triplet<double>> t;
-  auto id = [n](int i, int j, int k) { return (i * n + j) * n + k; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k) {
-        const int r = id(i, j, k);
-        t.emplace_back(r, r, 6.0);
-        if (i > 0) t.emplace_back(r, id(i - 1, j, k), -1.0);
-        if (i + 1 < n) t.emplace_back(r, id(i + 1, j, k), -1.0);
-        if (j > 0) t.emplace_back(r, id(i, j - 1, k), -1.0);
-        if (j + 1 < n) t.emplace_back(r, id(i, j + 1, k), -1.0);
-        if (k > 0) t.emplace_back(r, id(i, j, k - 1), -1.0);
-        if (k + 1 < n) t.emplace_back(r, id(i, j, k + 1), -1.0);
-      }
-  SparseMatrix A(n * n * n, n * n * n);
-  A.setFromTriplets(t.begin(), t.end());
-  return A;
-}
-
-Vector random_vector(long n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Vector v(n);
-  for (long i = 0; i < n; ++i) v[i] = u(rng);
-  return v;
-}
-
-// The dual system of a scene at its first outer iteration: positions predicted under gravity
-// from the scene's start (bar_hang starts pre-stretched, so every ARAP gradient is defined),
-// then `iterations` outer iterations with CHOLMOD so the matrix is one a simulation meets.
-struct SceneSystem {
-  Problem prob;
-  std::unique_ptr<DualSystem> ds;
-  Vector b;
-};
-
-SceneSystem scene_system(const std::string& scene, int resolution, int iterations) {
-  Params p;
-  load_scene_file(resolve_scene(scene), p);
-  p.resolution = resolution;
-  SceneSystem s;
-  s.prob = build_problem(p);
-  Particles& P = s.prob.particles;
-  const double h = p.dt / p.substeps;
-  for (int i = 0; i < P.size(); ++i)
-    if (P.w[i] > 0) P.x(1, i) += h * h * p.gravity;
-  s.ds = std::make_unique<DualSystem>(s.prob);
-  const Vector at = scaled_compliance(s.prob, h);
-  Vector lambda = Vector::Zero(s.prob.num_constraints());
-  auto direct = make_linear_solver("cholmod", p);
-  ConstraintState st;
-  for (int it = 0;; ++it) {
-    evaluate_constraints(s.prob, P.x, st);
-    s.ds->fill(st, at);
-    s.b = -(st.C + at.cwiseProduct(lambda));
-    if (it == iterations) break;
-    direct->setup(s.ds->A(), SetupKind::Structure, {});
-    Vector dl;
-    direct->solve(s.b, dl);
-    lambda += dl;
-    Eigen::Matrix3Xd dx;
-    s.ds->apply_minv_gradT(st, dl, dx);
-    P.x += dx;
-  }
-  return s;
-}
-
-double rel_diff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
-
-}  // namespace
 
 TEST(AmgStrength, KeepsExactlyTheStrongEntries) {
   SceneSystem s = scene_system("cloth_hang", 6, 0);
@@ -464,49 +378,5 @@ TEST(AmgScenes, MgpbdConvergesInAThirdOfCgIterations) {
         EXPECT_LE(3 * ms.iterations, cs.iterations) << what;
       }
     }
-  }
-}
-
-// Not a test: the measurement behind the report (levels, operator complexity, PCG iterations and
-// times per smoother and near-kernel on cloth_hang 64 and bar_hang 8 after two outer iterations).
-// Run: xb_tests --gtest_also_run_disabled_tests --gtest_filter=AmgMeasure.*  (XB_AMG_CASES=small|big)
-TEST(AmgMeasure, DISABLED_Scenes) {
-  const char* env = std::getenv("XB_AMG_CASES");
-  std::vector<std::pair<std::string, int>> cases = {{"cloth_hang", 64}, {"bar_hang", 8}};
-  if (env && std::string(env) == "small") cases = {{"cloth_hang", 32}, {"bar_hang", 4}};
-  if (env && std::string(env) == "big") cases = {{"cloth_hang", 128}, {"bar_hang", 12}};
-  for (const auto& [sc, res] : cases) {
-    SceneSystem s = scene_system(sc, res, 2);
-    const SparseMatrix& A = s.ds->A();
-    Params p;
-    p.linear_tol = 1e-8;
-    p.linear_max_iterations = 100000;
-    Vector x, r;
-    auto cg = make_linear_solver("cg", p);
-    cg->setup(A, SetupKind::Structure, {});
-    const LinearStats cs = cg->solve(s.b, x);
-    printf("%s res %d rows %ld nnz %ld: cg %d its solve %.3f s\n", sc.c_str(), res, (long)A.rows(), (long)A.nonZeros(), cs.iterations, cs.solve_time);
-    for (const std::string nkv : {"ones", "gs", "gs4"})
-      for (const std::string sm : {"jacobi", "chebyshev", "gs"})
-        for (int sw : {1, 2}) {
-          const std::string nk = nkv == "ones" ? "ones" : "gs";
-          p.amg_smoother = sm;
-          p.amg_near_kernel = nk;
-          p.amg_near_kernel_vectors = nkv == "gs4" ? 4 : 1;
-          p.amg_smoother_sweeps = sw;
-          auto mg = make_linear_solver("mgpbd", p);
-          mg->setup(A, SetupKind::Structure, {});
-          const LinearStats ms = mg->solve(s.b, x);
-          mg->setup(A, SetupKind::Values, {0, 0, 1});
-          const LinearStats ms2 = mg->solve(s.b, x);
-          residual(A, x, s.b, r);
-          const auto st = mg->statistics();
-          printf("  %s/%s x%d: levels %g oc %.3f gc %.3f its %d (true rel %.1e) setup %.4f refresh %.4f solve %.4f s rows:", nkv.c_str(), sm.c_str(), sw,
-                 st.at("levels"), st.at("operator_complexity"), st.at("grid_complexity"), ms.iterations, r.norm() / s.b.norm(),
-                 ms.setup_time, ms2.setup_time, ms.solve_time);
-          const auto arrays = mg->array_statistics();
-          for (double v : arrays.at("level_rows")) printf(" %g", v);
-          printf("\n");
-        }
   }
 }

@@ -8,6 +8,7 @@
 #include "solvers/kernels.hpp"
 #include "solvers/pcg.hpp"
 #include "solvers/timer.hpp"
+#include "amg_test_support.hpp"
 #include "test_amg_primal.hpp"
 
 #include <gtest/gtest.h>
@@ -122,4 +123,49 @@ TEST(AmgPrimalMeasure, DISABLED_Systems) {
       split(sys ? sys : "cloth_hang/resolution=64/frames=3;bar_hang/resolution=8/frames=1", ';');
   const std::vector<std::string> variants = split(var ? var : "default;theta=0;prol=tentative;diag=block", ';');
   for (const std::string& s : systems) measure_system(s, variants);
+}
+
+// Not a test: the measurement behind the report (levels, operator complexity, PCG iterations and
+// times per smoother and near-kernel on cloth_hang 64 and bar_hang 8 after two outer iterations).
+// Run: xb_tests --gtest_also_run_disabled_tests --gtest_filter=AmgMeasure.*  (XB_AMG_CASES=small|big)
+TEST(AmgMeasure, DISABLED_Scenes) {
+  using namespace xb::test;
+  const char* env = std::getenv("XB_AMG_CASES");
+  std::vector<std::pair<std::string, int>> cases = {{"cloth_hang", 64}, {"bar_hang", 8}};
+  if (env && std::string(env) == "small") cases = {{"cloth_hang", 32}, {"bar_hang", 4}};
+  if (env && std::string(env) == "big") cases = {{"cloth_hang", 128}, {"bar_hang", 12}};
+  for (const auto& [sc, res] : cases) {
+    SceneSystem s = scene_system(sc, res, 2);
+    const SparseMatrix& A = s.ds->A();
+    Params p;
+    p.linear_tol = 1e-8;
+    p.linear_max_iterations = 100000;
+    Vector x, r;
+    auto cg = make_linear_solver("cg", p);
+    cg->setup(A, SetupKind::Structure, {});
+    const LinearStats cs = cg->solve(s.b, x);
+    printf("%s res %d rows %ld nnz %ld: cg %d its solve %.3f s\n", sc.c_str(), res, (long)A.rows(), (long)A.nonZeros(), cs.iterations, cs.solve_time);
+    for (const std::string nkv : {"ones", "gs", "gs4"})
+      for (const std::string sm : {"jacobi", "chebyshev", "gs"})
+        for (int sw : {1, 2}) {
+          const std::string nk = nkv == "ones" ? "ones" : "gs";
+          p.amg_smoother = sm;
+          p.amg_near_kernel = nk;
+          p.amg_near_kernel_vectors = nkv == "gs4" ? 4 : 1;
+          p.amg_smoother_sweeps = sw;
+          auto mg = make_linear_solver("mgpbd", p);
+          mg->setup(A, SetupKind::Structure, {});
+          const LinearStats ms = mg->solve(s.b, x);
+          mg->setup(A, SetupKind::Values, {0, 0, 1});
+          const LinearStats ms2 = mg->solve(s.b, x);
+          residual(A, x, s.b, r);
+          const auto st = mg->statistics();
+          printf("  %s/%s x%d: levels %g oc %.3f gc %.3f its %d (true rel %.1e) setup %.4f refresh %.4f solve %.4f s rows:", nkv.c_str(), sm.c_str(), sw,
+                 st.at("levels"), st.at("operator_complexity"), st.at("grid_complexity"), ms.iterations, r.norm() / s.b.norm(),
+                 ms.setup_time, ms2.setup_time, ms.solve_time);
+          const auto arrays = mg->array_statistics();
+          for (double v : arrays.at("level_rows")) printf(" %g", v);
+          printf("\n");
+        }
+  }
 }
