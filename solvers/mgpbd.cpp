@@ -8,7 +8,6 @@
 // primal form's K (block size 3, rigid-body modes given) it defaults to nodal smoothed
 // aggregation with the 6 rigid modes (amg.near_kernel = auto, amg.prolongator = auto).
 #include "amg/hierarchy.hpp"
-#include "amg/vcycle.hpp"
 #include "factories.hpp"
 #include "pcg.hpp"
 #include "setup_policy.hpp"

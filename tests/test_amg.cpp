@@ -11,7 +11,6 @@
 #include "solvers/amg/near_kernel.hpp"
 #include "solvers/amg/strength.hpp"
 #include "solvers/amg/tentative.hpp"
-#include "solvers/amg/vcycle.hpp"
 #include "solvers/kernels.hpp"
 #include "solvers/linear_solver.hpp"
 #include "solvers/pcg.hpp"

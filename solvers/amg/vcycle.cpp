@@ -1,6 +1,7 @@
-// Algorithm 2: down the levels (pre-smooth from zero, restrict the residual), direct solve on the
-// coarsest, up the levels (prolongate and add the correction, post-smooth). Loops, no recursion.
-#include "vcycle.hpp"
+// Hierarchy::vcycle, Algorithm 2: down the levels (pre-smooth from zero, restrict the residual),
+// direct solve on the coarsest, up the levels (prolongate and add the correction, post-smooth).
+// Loops, no recursion.
+#include "hierarchy.hpp"
 
 #include "../kernels.hpp"
 
