@@ -10,6 +10,8 @@
 #include "problems/error.hpp"
 #include "test_amg_primal.hpp"
 
+#include "amg_test_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
@@ -20,14 +22,6 @@ using xb::test::primal_case;
 
 namespace {
 using Dense = Eigen::MatrixXd;
-
-Vector random_vec(long n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Vector v(n);
-  for (long i = 0; i < n; ++i) v[i] = u(rng);
-  return v;
-}
 
 double rel(const Dense& a, const Dense& b) { return (a - b).norm() / b.norm(); }
 
@@ -126,7 +120,7 @@ TEST(AmgBlockDiagonal, InverseAndLanczosAgainstDense) {
   const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K.rows()), 3);
   BlockDiagonal D;
   D.build(K, nodes);
-  const Vector x = random_vec(K.rows(), 4);
+  const Vector x = xb::test::random_vector(K.rows(), 4);
   Vector y, z;
   D.apply(x, y);
   D.apply_inverse(y, z);
@@ -140,7 +134,7 @@ TEST(AmgBlockDiagonal, InverseAndLanczosAgainstDense) {
 TEST(AmgGalerkinProduct, RefreshEqualsAFreshProduct) {
   const SparseMatrix K1 = bar().K;
   SparseMatrix K2 = K1;
-  const Vector noise = random_vec(K2.nonZeros(), 9);
+  const Vector noise = xb::test::random_vector(K2.nonZeros(), 9);
   for (long k = 0; k < K2.nonZeros(); ++k) K2.valuePtr()[k] *= 1.0 + 0.1 * noise[k];
   const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K1.rows()), 3);
   const Tentative T = tentative_prolongator(nodal_aggregation(K1, nodes, 0.0, &standard_aggregation), bar().rigid);
@@ -160,7 +154,7 @@ namespace {
 void check_spd(Hierarchy& h, const std::string& what) {
   const long n = h.matrix(0).rows();
   for (unsigned s = 0; s < 3; ++s) {
-    const Vector x = random_vec(n, 100 + s), y = random_vec(n, 200 + s);
+    const Vector x = xb::test::random_vector(n, 100 + s), y = xb::test::random_vector(n, 200 + s);
     Vector vx, vy;
     h.vcycle(x, vx);
     h.vcycle(y, vy);

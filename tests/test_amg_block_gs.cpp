@@ -9,6 +9,8 @@
 #include "test_amg_primal.hpp"
 
 #include <Eigen/SparseCholesky>
+#include "amg_test_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -22,14 +24,6 @@ using xb::test::PrimalCase;
 
 namespace {
 using Dense = Eigen::MatrixXd;
-
-Vector random_vec(long n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Vector v(n);
-  for (long i = 0; i < n; ++i) v[i] = u(rng);
-  return v;
-}
 
 const PrimalCase& bar() {
   static const auto c = primal_case("bar_hang", {{"resolution", "3"}, {"aspect", "3"}, {"prestretch", "1.05"}}, 1, 0);
@@ -70,7 +64,7 @@ TEST(AmgBlockGs, SweepEqualsDenseNodeByNodeGaussSeidel) {
     D.build(A, nodes);
     const Coloring col = node_coloring(A, nodes);
     EXPECT_GT(col.num_colors, 1);
-    const Vector b = random_vec(A.rows(), 3 + l), x0 = random_vec(A.rows(), 7 + l);
+    const Vector b = xb::test::random_vector(A.rows(), 3 + l), x0 = xb::test::random_vector(A.rows(), 7 + l);
     for (const bool forward : {true, false}) {
       Vector x = x0;
       block_gs_sweep(A, D, col, b, x, forward);
@@ -90,7 +84,7 @@ TEST(AmgBlockGs, OneSweepSolvesABlockDiagonalSystem) {
   Dense Ad = Dense::Zero(n, n);
   for (int I = 0; I < nodes.num_nodes(); ++I) {
     const int s = nodes.node_start[I], bs = nodes.node_start[I + 1] - s;
-    const Dense G = Eigen::Map<const Dense>(random_vec(bs * bs, 40 + I).data(), bs, bs);
+    const Dense G = Eigen::Map<const Dense>(xb::test::random_vector(bs * bs, 40 + I).data(), bs, bs);
     Ad.block(s, s, bs, bs) = G * G.transpose() + 0.5 * Dense::Identity(bs, bs);
   }
   const SparseMatrix A = Ad.sparseView();
@@ -98,9 +92,9 @@ TEST(AmgBlockGs, OneSweepSolvesABlockDiagonalSystem) {
   so.kind = "block_gs";
   auto sm = make_smoother(so, A, nodes);
   EXPECT_EQ(sm->name(), "block_gs");
-  const Vector b = random_vec(n, 5);
+  const Vector b = xb::test::random_vector(n, 5);
   const Vector exact = Ad.llt().solve(b);
-  Vector x = random_vec(n, 6);
+  Vector x = xb::test::random_vector(n, 6);
   sm->postsmooth(A, b, x);  // one backward sweep from a non-zero start
   EXPECT_LE((x - exact).norm(), 1e-12 * exact.norm());
   sm->presmooth(A, b, x, true);  // one forward sweep from zero
@@ -121,7 +115,7 @@ TEST(AmgBlockGs, VcycleWithSeveralSweepsIsSymmetricPositiveDefinite) {
       ASSERT_GE(h.num_levels(), 3);
       const long n = h.matrix(0).rows();
       for (unsigned s = 0; s < 3; ++s) {
-        const Vector x = random_vec(n, 300 + s), y = random_vec(n, 400 + s);
+        const Vector x = xb::test::random_vector(n, 300 + s), y = xb::test::random_vector(n, 400 + s);
         Vector vx, vy;
         h.vcycle(x, vx);
         h.vcycle(y, vy);
@@ -133,16 +127,6 @@ TEST(AmgBlockGs, VcycleWithSeveralSweepsIsSymmetricPositiveDefinite) {
 }
 
 namespace {
-LinearStats solve_k(const PrimalCase& c, const Params& p, const std::string& method, Vector& x,
-                    const RelativeResidual& rel = nullptr) {
-  auto s = make_linear_solver(method, p);
-  if (rel) s->set_relative_residual(rel);
-  SetupContext ctx;
-  ctx.block_size = 3;
-  ctx.near_kernel = &c.rigid;
-  s->setup(c.K, SetupKind::Structure, ctx);
-  return s->solve(c.f, x);
-}
 }  // namespace
 
 // mgpbd with each block smoother (auto sweeps: 2 on K) reaches 1e-8 on K (recomputed) and, solved

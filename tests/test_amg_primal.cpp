@@ -24,18 +24,6 @@ Params solver_params(double tol) {
   return p;
 }
 
-LinearStats solve_k(const PrimalCase& c, const Params& p, const std::string& method, Vector& x,
-                    const RelativeResidual& rel = nullptr) {
-  auto s = make_linear_solver(method, p);
-  if (rel) {
-    EXPECT_TRUE(s->set_relative_residual(rel));
-  }
-  SetupContext ctx;
-  ctx.block_size = 3;
-  ctx.near_kernel = &c.rigid;
-  s->setup(c.K, SetupKind::Structure, ctx);
-  return s->solve(c.f, x);
-}
 }  // namespace
 
 // mgpbd (defaults: nodal SA, 6 rigid modes, Chebyshev) on a small K reaches 1e-8 (recomputed from

@@ -9,6 +9,8 @@
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"
 
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,5 +42,20 @@ PrimalCase primal_case(const std::string& scene, const std::vector<std::pair<std
 
 // K's pattern filled by new values: the same construction at a slightly moved state.
 SparseMatrix primal_matrix(const Problem& prob, const Eigen::Matrix3Xd& x, double h, SparseMatrix* J_out = nullptr);
+
+// `method` on the case's K with its block size and rigid modes, optionally judged by `rel` (which
+// the in-house solvers must accept).
+inline LinearStats solve_k(const PrimalCase& c, const Params& p, const std::string& method, Vector& x,
+                    const RelativeResidual& rel = nullptr) {
+  auto s = make_linear_solver(method, p);
+  if (rel) {
+    EXPECT_TRUE(s->set_relative_residual(rel));
+  }
+  SetupContext ctx;
+  ctx.block_size = 3;
+  ctx.near_kernel = &c.rigid;
+  s->setup(c.K, SetupKind::Structure, ctx);
+  return s->solve(c.f, x);
+}
 
 }  // namespace xb::test
