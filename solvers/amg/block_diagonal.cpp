@@ -1,5 +1,7 @@
 #include "block_diagonal.hpp"
 
+#include "lanczos.hpp"
+
 #include "../../problems/error.hpp"
 #include "../kernels.hpp"
 #include "smoothers.hpp"
@@ -71,47 +73,18 @@ void BlockDiagonal::apply(const Vector& x, Vector& y) const { apply_blocks(start
 double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector& v, int iterations, unsigned seed) {
   const long n = A.rows();
   if (n == 0) return 0;
-  if (v.size() != n || v.squaredNorm() == 0) {
-    std::mt19937_64 rng(seed * 7919ull + 17);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    v.resize(n);
-    for (long i = 0; i < n; ++i) v[i] = u(rng);
-  }
   Vector Dx(n);
   auto dnorm = [&](const Vector& x) {
     D.apply(x, Dx);
     return std::sqrt(std::max(0.0, dot(x, Dx)));
   };
-  const int steps = static_cast<int>(std::min<long>(n, std::max(iterations, 10)));
-  Vector q = v / dnorm(v), q_prev = Vector::Zero(n), Aq(n), w(n);
-  std::vector<double> alpha, beta;
-  std::vector<Vector> basis;
-  double beta_prev = 0;
-  for (int k = 0; k < steps; ++k) {
-    basis.push_back(q);
-    spmv(A, q, Aq);
-    const double a = dot(q, Aq);  // ⟨q, D⁻¹Aq⟩_D
+  auto step = [&](const Vector& Aq, const Vector& q, const Vector& q_prev, double a, double beta, Vector& w) {
     D.apply_inverse(Aq, w);
-    w -= a * q + beta_prev * q_prev;
-    const double b = dnorm(w);
-    alpha.push_back(a);
-    beta.push_back(b);
-    if (!(b > 1e-12 * std::abs(a)) || !std::isfinite(b)) break;  // invariant subspace found
-    q_prev = q;
-    q = w / b;
-    beta_prev = b;
-  }
-  const int m = static_cast<int>(alpha.size());
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(m, m);
-  for (int k = 0; k < m; ++k) {
-    T(k, k) = alpha[k];
-    if (k + 1 < m) T(k, k + 1) = T(k + 1, k) = beta[k];
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(T);
-  if (es.info() != Eigen::Success) throw Error("block Lanczos: the tridiagonal eigenproblem failed");
-  v.setZero(n);  // the top Ritz vector: the start of a next estimate
-  for (int k = 0; k < m; ++k) v += es.eigenvectors()(k, m - 1) * basis[k];
-  return es.eigenvalues()(m - 1) + std::abs(beta[m - 1] * es.eigenvectors()(m - 1, m - 1));
+    w -= a * q + beta * q_prev;
+  };
+  const double bound = lanczos_lambda_max(A, v, iterations, seed, dnorm, step);
+  if (std::isnan(bound)) throw Error("block Lanczos: the tridiagonal eigenproblem failed");
+  return bound;
 }
 
 }  // namespace xb::amg

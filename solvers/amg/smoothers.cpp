@@ -1,5 +1,7 @@
 #include "smoothers.hpp"
 
+#include "lanczos.hpp"
+
 #include "../../problems/error.hpp"
 #include "../kernels.hpp"
 #include "block_chebyshev.hpp"
@@ -58,53 +60,18 @@ double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector
     for (int k = outer[i]; k < outer[i + 1]; ++k) row += std::abs(val[k]);
     gershgorin = std::max(gershgorin, inv_diag[i] * row);
   }
-  if (v.size() != n || v.squaredNorm() == 0) {
-    std::mt19937_64 rng(seed * 7919ull + 17);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    v.resize(n);
-    for (long i = 0; i < n; ++i) v[i] = u(rng);
-  }
   auto dnorm = [&](const Vector& x) {
     double s = 0;
 #pragma omp parallel for schedule(static) reduction(+ : s) if (n > kMinParallelRows)
     for (long i = 0; i < n; ++i) s += inv_diag[i] > 0 ? x[i] * x[i] / inv_diag[i] : 0.0;
     return std::sqrt(s);
   };
-  const int steps = static_cast<int>(std::min<long>(n, std::max(iterations, 10)));
-  Vector q = v / dnorm(v), q_prev = Vector::Zero(n), Aq(n), w(n);
-  std::vector<double> alpha, beta;
-  std::vector<Vector> basis;  // for the top Ritz vector, the start of the next estimate
-  double beta_prev = 0;
-  for (int k = 0; k < steps; ++k) {
-    basis.push_back(q);
-    spmv(A, q, Aq);
-    const double a = dot(q, Aq);  // ⟨q, D⁻¹Aq⟩_D
+  auto step = [&](const Vector& Aq, const Vector& q, const Vector& q_prev, double a, double beta, Vector& w) {
 #pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-    for (long i = 0; i < n; ++i) w[i] = inv_diag[i] * Aq[i] - a * q[i] - beta_prev * q_prev[i];
-    const double b = dnorm(w);
-    alpha.push_back(a);
-    beta.push_back(b);
-    if (!(b > 1e-12 * std::abs(a)) || !std::isfinite(b)) break;  // invariant subspace found
-    q_prev = q;
-    q = w / b;
-    beta_prev = b;
-  }
-  const int m = static_cast<int>(alpha.size());
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(m, m);
-  for (int k = 0; k < m; ++k) {
-    T(k, k) = alpha[k];
-    if (k + 1 < m) T(k, k + 1) = T(k + 1, k) = beta[k];
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(T);
-  if (es.info() != Eigen::Success) return gershgorin;
-  // The next estimate (a refresh, 10 steps) starts from the top Ritz vector. Starting it from the
-  // last Lanczos vector, which is nearly orthogonal to the top eigenvector, underestimated
-  // λ_max by up to 35% on coarse levels of K, and Chebyshev then made the V-cycle indefinite.
-  v.setZero(n);
-  for (int k = 0; k < m; ++k) v += es.eigenvectors()(k, m - 1) * basis[k];
-  const double ritz = es.eigenvalues()(m - 1);
-  const double bound = ritz + std::abs(beta[m - 1] * es.eigenvectors()(m - 1, m - 1));
-  return std::min(bound, gershgorin);
+    for (long i = 0; i < n; ++i) w[i] = inv_diag[i] * Aq[i] - a * q[i] - beta * q_prev[i];
+  };
+  const double bound = lanczos_lambda_max(A, v, iterations, seed, dnorm, step);
+  return std::isnan(bound) ? gershgorin : std::min(bound, gershgorin);
 }
 
 namespace {

@@ -1,0 +1,25 @@
+// λ_max(D⁻¹A) by Lanczos in the D inner product, for any diagonal D (scalar or node blocks): the
+// smoothers' and the smoothed prolongator's spectral bound.
+#pragma once
+
+#include "../../problems/sparse.hpp"
+
+#include <functional>
+
+namespace xb::amg {
+
+// ‖x‖_D.
+using DNorm = std::function<double(const Vector& x)>;
+// w = D⁻¹Aq − a·q − β·q_prev (one Lanczos step's three-term recurrence).
+using LanczosStep =
+    std::function<void(const Vector& Aq, const Vector& q, const Vector& q_prev, double a, double beta, Vector& w)>;
+
+// max(iterations, 10) steps (at most n) from v — a seeded random vector when v is empty or zero —
+// and the largest Ritz value plus its residual bound. v becomes the top Ritz vector, the start of
+// the next estimate (from the last Lanczos vector, nearly orthogonal to the top eigenvector, a
+// refresh underestimated λ_max by up to 35% on coarse levels of K). NaN if the tridiagonal
+// eigenproblem fails.
+double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsigned seed, const DNorm& dnorm,
+                          const LanczosStep& step);
+
+}  // namespace xb::amg
