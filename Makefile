@@ -36,7 +36,7 @@ figures: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-# CI performance tracking (issue 7): microbenchmarks + deterministic metrics into
+# CI performance tracking: microbenchmarks + deterministic metrics into
 # results/perf/<git-sha>.json, compared with results/baselines/perf.json; fails when an iteration
 # count (+10 %) or operator complexity (+2 %) got worse. PERF_FLAGS=--short: the CI gate's form.
 PERF_FLAGS ?=

@@ -1,4 +1,4 @@
-// xb_bench: Google Benchmark of the linear level (issue 3) on one captured dual system of at
+// xb_bench: Google Benchmark of the linear level on one captured dual system of at
 // least 50,000 rows: mgpbd's setup, values refresh, one V-cycle and full solve, with cholmod
 // and cg (and jacobi-pcg) full solves in the same run, all under one clock (wall time: the
 // kernels are OpenMP-parallel).

@@ -1,4 +1,4 @@
-// xb_microbench: the timed half of CI performance tracking (issue 7), in Google Benchmark.
+// xb_microbench: the timed half of CI performance tracking, in Google Benchmark.
 // Kernels: assembly of A (evaluate_constraints + DualSystem::fill), SpMV, one outer iteration of
 // each local method, setup (structure and values) and a full solve of a captured system by every
 // registered linear solver, and — where solvers/amg is built — one sweep of each smoother, one

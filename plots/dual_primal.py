@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The "dual vs primal" claim of `make figures` (issue 11): every global method in both forms of
+"""The "dual vs primal" claim of `make figures`: every global method in both forms of
 the linear step, across resolution, on cloth_hang and the 5%-stretched bar_hang.
 
 usage: python3 plots/dual_primal.py RESULTS.h5 [RESULTS2.h5 ...] [-o OUT.png]
@@ -243,7 +243,7 @@ def draw(rows, out):
 
 def claim(S, files, notes, out, keys):
     """figures.py's claim: summary rows, the "dual vs primal" section and the figure (S: figures.Summary)."""
-    claim = "dual vs primal (issue 11)"
+    claim = "dual vs primal"
     rows = load_rows([files.get(k) for k in keys])
     for k in keys:
         if k in notes:
@@ -262,7 +262,7 @@ def claim(S, files, notes, out, keys):
     g = growth(rows, "bar_hang")
     if g:
         S.add(claim, f"bar_hang: primal mgpbd iterations per solve, resolution {g[0]} → {g[1]} (first {g[4]} solves)",
-              "within ±30% as resolution doubles twice (issue 11)",
+              "within ±30% as resolution doubles twice",
               f"{_e(round(g[2], 1))} → {_e(round(g[3], 1))} ({(g[3] / g[2] - 1) * 100:+.0f}%)")
     scenes = sorted({r["scene"] for r in rows})
     per_run = ", ".join(f"{s}: {max(r['solves'] for r in rows if r['scene'] == s)}" for s in scenes)

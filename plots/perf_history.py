@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Each tracked performance metric over the runs in results/perf/*.json (issue 7).
+"""Each tracked performance metric over the runs in results/perf/*.json.
 
   perf_history.py [--dir results/perf] [--baseline results/baselines/perf.json]
                   [--match REGEX] [-o plots/perf_history]

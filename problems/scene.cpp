@@ -153,7 +153,7 @@ Problem build_bar_hang(const Params& p) {
   return prob;
 }
 
-// ---- issue 5: the paper's scenes. Each takes its mesh from the `mesh` key (load_tet_mesh).
+// ---- The paper's scenes. Each takes its mesh from the `mesh` key (load_tet_mesh).
 
 // Uniform scaling about the origin so that the y extent is `height` m: the rest shape (volumes,
 // hence α = 1/(μV)) scales with it, as when the authors load their 0.2 m bunny.

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""CI performance tracking (issue 7): run, record, compare.
+"""CI performance tracking: run, record, compare.
 
   perf.py run [--build DIR] [--short] [--baseline FILE] [--write-baseline] [--out FILE]
       Runs the deterministic metrics (xb_perf_metrics) and the Google Benchmark microbenchmarks

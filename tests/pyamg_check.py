@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent check of the in-house AMG (issue 3): mgpbd against pyamg on the same matrices.
+"""Independent check of the in-house AMG: mgpbd against pyamg on the same matrices.
 
 For captured dual systems (cloth_hang, bar_hang) and several strength thresholds θ_s, compare
   harness:  xpbd-bench solve --solver mgpbd with amg.near_kernel=ones, amg.aggregation=standard,

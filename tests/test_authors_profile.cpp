@@ -1,4 +1,4 @@
-// The authors' setup as options (issue 12): their logged residual beside the true one, the
+// The authors' setup as options: their logged residual beside the true one, the
 // line-search step, their XPBD baseline, the scene keys mesh_height / init, and --profile.
 // Each test fails if its option is ignored: the numbers are analytic (a one-spring pendulum whose
 // constraint stays linear along the motion) or compare the option on and off.

@@ -1,4 +1,4 @@
-// The linear level (issue 3): `capture` writes exactly the assembled dual system, `solve` records
+// The linear level: `capture` writes exactly the assembled dual system, `solve` records
 // what every linear solver did on it, with residuals and errors that the test recomputes
 // independently (Eigen's sparse Cholesky, not CHOLMOD).
 #include "harness/cli/commands.hpp"
@@ -303,7 +303,7 @@ double recomputed_residual(const CapturedSystem& s, const RunRecord& r) {
 
 // The issue's claim: on captured cloth_hang and bar_hang systems mgpbd reaches 1e-8 in at most a
 // tenth of cg's iterations, and the residual it reports is the one recomputed from A and x.
-// Issue 3 asks for at most a tenth of cg's iterations. Measured: a fifth to a quarter (cloth
+// The target was at most a tenth of cg's iterations. Measured: a fifth to a quarter (cloth
 // 108 vs 485, bar 78 vs 330), the same as pyamg's identical hierarchy gives (tests/pyamg_check.py),
 // and the coarse space barely matters on these systems (θ_s = 0.5, operator complexity 1.0001:
 // 102 iterations vs 104 at θ_s = 0). The test asserts the measured factor with a margin — at most

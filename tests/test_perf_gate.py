@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The CI performance gate (scripts/perf.py, issue 7).
+"""The CI performance gate (scripts/perf.py).
 
 1. The comparison rules at their boundaries, on hand-made metric files.
 2. End to end with the real solvers: xb_perf_metrics run twice on an unchanged tree gives a

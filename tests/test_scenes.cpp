@@ -1,4 +1,4 @@
-// The paper's scenes (issue 5): builders (counts, pins, colliders), variants, stability checks,
+// The paper's scenes: builders (counts, pins, colliders), variants, stability checks,
 // mesh output, and every scene × every method on a tiny size ending ok or with an honest status.
 #include "harness/cli/report.hpp"
 #include "harness/cli/run_setup.hpp"

@@ -1,4 +1,4 @@
-// xb_perf_metrics: the deterministic half of CI performance tracking (issue 7).
+// xb_perf_metrics: the deterministic half of CI performance tracking.
 // For a fixed set of small captured systems and short scenes it records what does not depend
 // on the machine's load: iterations to tolerance of every registered linear solver, AMG levels
 // and operator/grid complexity (LinearSolver::statistics()), outer iterations per substep of

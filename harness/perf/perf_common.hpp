@@ -1,4 +1,4 @@
-// What the performance tracking (issue 7) shares between the deterministic-metrics tool
+// What the performance tracking shares between the deterministic-metrics tool
 // (harness/perf/metrics.cpp) and the microbenchmarks (bench/microbench.cpp): the fixed set of
 // captured systems and scenes, and how a system is captured.
 #pragma once

@@ -1,4 +1,4 @@
-// Stability checks after every substep (issue 5). A failure becomes the run's status with a
+// Stability checks after every substep. A failure becomes the run's status with a
 // message; the stepper's own per-iteration checks cover residual blow-up (diverged), non-finite
 // residuals (nan) and linear-solver breakdown (breakdown).
 //   nan       a position or velocity is NaN or Inf

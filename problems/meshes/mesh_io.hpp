@@ -7,7 +7,7 @@
 //    MeshReadReport::flipped;
 //  - a tet whose |volume| ≤ degenerate_volume_ratio × the median |volume| of the mesh is
 //    degenerate: an error naming its line (such a tet has α = 1/(μV) → ∞ and Dm⁻¹ undefined);
-//  - a vertex no tet uses is an error (issue 5: it would be a free particle with no constraint,
+//  - a vertex no tet uses is an error (it would be a free particle with no constraint,
 //    usually a sign of a broken export), naming the vertex's line.
 // Malformed files (truncated, wrong counts, bad numbers, unknown sections, binary .msh) end in
 // xb::Error with one line "FILE:LINE: what is wrong". Nothing here crashes on bad input.
