@@ -17,11 +17,11 @@
 #include "../problems/scene.hpp"
 #include "../solvers/kernels.hpp"
 #include "../solvers/linear_solver.hpp"
-#include "../solvers/xpbd_local.hpp"
+#include "../solvers/local/xpbd_local.hpp"
 
 #if __has_include("../solvers/amg/hierarchy.hpp")
 #include "../solvers/amg/hierarchy.hpp"
-#include "../solvers/amg/smoothers.hpp"
+#include "../solvers/amg/relaxation/smoothers.hpp"
 #define XB_BENCH_AMG 1
 #endif
 

@@ -1,4 +1,4 @@
-// The in-house MGPBD AMG (solvers/amg/, solvers/mgpbd.cpp) against numbers that can be wrong:
+// The in-house MGPBD AMG (solvers/amg/, solvers/amg/mgpbd.cpp) against numbers that can be wrong:
 // dense products, orthonormality, symmetry and definiteness of the V-cycle, grid-independence on
 // Poisson, and iteration counts against plain CG on real XPBD dual systems.
 #include "problems/dual_system.hpp"
@@ -13,7 +13,7 @@
 #include "solvers/amg/tentative.hpp"
 #include "solvers/kernels.hpp"
 #include "solvers/linear_solver.hpp"
-#include "solvers/pcg.hpp"
+#include "solvers/krylov/pcg.hpp"
 
 #include "amg_test_support.hpp"
 

@@ -1,7 +1,7 @@
 // The in-house AMG on block systems (the primal form's K): nodal strength and aggregation, the
 // rigid-mode tentative prolongator, the smoothed prolongator, the cached Galerkin product and the
 // block V-cycle, against dense computations.
-#include "solvers/amg/block_diagonal.hpp"
+#include "solvers/amg/relaxation/block_diagonal.hpp"
 #include "solvers/amg/galerkin.hpp"
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/amg/nodal.hpp"

@@ -2,7 +2,7 @@
 // sweep against a dense node-by-node computation and on a block-diagonal system, the symmetry of
 // the V-cycle with several sweeps, mgpbd with each block smoother against a direct solve, and the
 // primal defaults' iteration advantage on the prestretched bar.
-#include "solvers/amg/block_gs.hpp"
+#include "solvers/amg/relaxation/block_gs.hpp"
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/kernels.hpp"
 #include "problems/error.hpp"

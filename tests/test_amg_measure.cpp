@@ -6,7 +6,7 @@
 //   XB_AMG_VARIANTS "key=value,...;..." keys: theta smoother sweeps prol diag nk nkv max_coarse
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/kernels.hpp"
-#include "solvers/pcg.hpp"
+#include "solvers/krylov/pcg.hpp"
 #include "solvers/timer.hpp"
 #include "amg_test_support.hpp"
 #include "test_amg_primal.hpp"

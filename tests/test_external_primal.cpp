@@ -9,7 +9,7 @@
 #include "harness/io/run_record.hpp"
 #include "problems/params.hpp"
 #include "problems/scene.hpp"
-#include "solvers/distributed.hpp"
+#include "solvers/mpi/distributed.hpp"
 #include "solvers/kernels.hpp"
 #include "solvers/linear_solver.hpp"
 

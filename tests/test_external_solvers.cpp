@@ -10,7 +10,7 @@
 #include "problems/dual_system.hpp"
 #include "problems/params.hpp"
 #include "problems/scene.hpp"
-#include "solvers/distributed.hpp"
+#include "solvers/mpi/distributed.hpp"
 #include "solvers/kernels.hpp"
 #include "solvers/linear_solver.hpp"
 

@@ -3,7 +3,7 @@
 #include "commands.hpp"
 
 #include "../../problems/error.hpp"
-#include "../../solvers/distributed.hpp"
+#include "../../solvers/mpi/distributed.hpp"
 
 #include <mpi.h>
 

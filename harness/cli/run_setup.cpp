@@ -4,7 +4,7 @@
 
 #include "../../problems/error.hpp"
 #include "../../problems/scene.hpp"
-#include "../../solvers/distributed.hpp"
+#include "../../solvers/mpi/distributed.hpp"
 #include "../../solvers/linear_solver.hpp"
 
 #include <sstream>

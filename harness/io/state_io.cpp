@@ -1,7 +1,7 @@
 #include "state_io.hpp"
 
 #include "../cli/run_setup.hpp"
-#include "../io/run_record.hpp"
+#include "run_record.hpp"
 #include "h5io.hpp"
 
 #include "../../problems/error.hpp"

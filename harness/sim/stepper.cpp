@@ -10,7 +10,7 @@
 #include "../../problems/error.hpp"
 #include "../../solvers/linear_solver.hpp"
 #include "../../solvers/timer.hpp"
-#include "../../solvers/xpbd_local.hpp"
+#include "../../solvers/local/xpbd_local.hpp"
 
 #include <omp.h>
 

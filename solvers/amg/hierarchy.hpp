@@ -14,7 +14,7 @@
 #include "near_kernel.hpp"
 #include "nodal.hpp"
 #include "smoothed_prolongator.hpp"
-#include "smoothers.hpp"
+#include "relaxation/smoothers.hpp"
 #include "tentative.hpp"
 
 #include <Eigen/Dense>

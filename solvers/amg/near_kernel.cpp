@@ -2,7 +2,7 @@
 
 #include "../../problems/error.hpp"
 #include "../kernels.hpp"
-#include "smoothers.hpp"
+#include "relaxation/smoothers.hpp"
 
 #include <cmath>
 #include <random>

@@ -1,9 +1,9 @@
 #include "smoothed_prolongator.hpp"
 
 #include "../../problems/error.hpp"
-#include "block_diagonal.hpp"
+#include "relaxation/block_diagonal.hpp"
 #include "galerkin.hpp"
-#include "smoothers.hpp"
+#include "relaxation/smoothers.hpp"
 
 #include <algorithm>
 #include <cmath>

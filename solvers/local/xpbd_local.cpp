@@ -1,6 +1,6 @@
 #include "xpbd_local.hpp"
 
-#include "../problems/error.hpp"
+#include "../../problems/error.hpp"
 
 #include <algorithm>
 

@@ -2,7 +2,7 @@
 // preconditioner): from x₀ = 0 to ‖r‖₂ ≤ tol·‖b‖₂, logging ‖r_k‖₂ with a time stamp.
 #pragma once
 
-#include "linear_solver.hpp"
+#include "../linear_solver.hpp"
 
 #include <functional>
 

@@ -2,8 +2,8 @@
 
 #include "lanczos.hpp"
 
-#include "../../problems/error.hpp"
-#include "../kernels.hpp"
+#include "../../../problems/error.hpp"
+#include "../../kernels.hpp"
 #include "block_chebyshev.hpp"
 #include "block_gs.hpp"
 

@@ -7,14 +7,14 @@
 // On the dual system (block size 1) it is the paper's unsmoothed aggregation with B = 1; on the
 // primal form's K (block size 3, rigid-body modes given) it defaults to nodal smoothed
 // aggregation with the 6 rigid modes (amg.near_kernel = auto, amg.prolongator = auto).
-#include "amg/hierarchy.hpp"
-#include "factories.hpp"
-#include "pcg.hpp"
-#include "setup_policy.hpp"
-#include "timer.hpp"
+#include "hierarchy.hpp"
+#include "../factories.hpp"
+#include "../krylov/pcg.hpp"
+#include "../setup_policy.hpp"
+#include "../timer.hpp"
 
-#include "../problems/error.hpp"
-#include "../problems/params.hpp"
+#include "../../problems/error.hpp"
+#include "../../problems/params.hpp"
 
 namespace xb {
 

@@ -10,7 +10,7 @@
 // the near-kernel basis travel with the setup command (RowBlock::block_size, ::near_kernel).
 #pragma once
 
-#include "linear_solver.hpp"
+#include "../linear_solver.hpp"
 
 #include <mpi.h>
 
@@ -73,7 +73,7 @@ class DistributedKernel {
 // Whether a method can run with more than one MPI process (hypre, muelu).
 bool method_is_distributed(const std::string& name);
 
-// Kernel constructors (solvers/hypre.cpp, solvers/muelu.cpp), only when built in.
+// Kernel constructors (solvers/mpi/hypre.cpp, solvers/mpi/muelu.cpp), only when built in.
 std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p);
 std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p);
 

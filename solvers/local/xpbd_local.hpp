@@ -20,10 +20,10 @@
 //    as theirs: meant for ARAP (C ≥ 0), it also skips every compressed distance constraint.
 #pragma once
 
-#include "../problems/dual_system.hpp"
-#include "../problems/params.hpp"
-#include "../problems/problem.hpp"
-#include "coloring.hpp"
+#include "../../problems/dual_system.hpp"
+#include "../../problems/params.hpp"
+#include "../../problems/problem.hpp"
+#include "../coloring.hpp"
 
 namespace xb {
 

@@ -1,12 +1,12 @@
 // Goldenthal's fast projection: a direct Cholesky solve of the global dual system with CHOLMOD
 // (supernodal LLᵀ). The symbolic analysis (fill-reducing ordering, supernodes) is done once per
 // sparsity pattern; the numeric factorisation once per matrix.
-#include "factories.hpp"
-#include "kernels.hpp"
-#include "timer.hpp"
+#include "../factories.hpp"
+#include "../kernels.hpp"
+#include "../timer.hpp"
 
-#include "../problems/error.hpp"
-#include "../problems/params.hpp"
+#include "../../problems/error.hpp"
+#include "../../problems/params.hpp"
 
 #include <cholmod.h>
 

@@ -24,11 +24,11 @@
 //    failed on the bar (error 12, a bad argument inside hypre), GM-1 made PCG break down on
 //    cloth, LN aborted in the setup; both need nodal coarsening, which costs iterations here.
 #include "distributed.hpp"
-#include "setup_policy.hpp"
-#include "timer.hpp"
+#include "../setup_policy.hpp"
+#include "../timer.hpp"
 
-#include "../problems/error.hpp"
-#include "../problems/params.hpp"
+#include "../../problems/error.hpp"
+#include "../../problems/params.hpp"
 
 #include <HYPRE.h>
 #include <HYPRE_krylov.h>

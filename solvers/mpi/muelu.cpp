@@ -15,11 +15,11 @@
 // tP keeps the tentative prolongator and redoes the rest ("reuse-tP"). muelu.reuse = none rebuilds
 // on every setup.
 #include "distributed.hpp"
-#include "setup_policy.hpp"
-#include "timer.hpp"
+#include "../setup_policy.hpp"
+#include "../timer.hpp"
 
-#include "../problems/error.hpp"
-#include "../problems/params.hpp"
+#include "../../problems/error.hpp"
+#include "../../problems/params.hpp"
 
 #include <BelosCGIter.hpp>
 #include <BelosLinearProblem.hpp>

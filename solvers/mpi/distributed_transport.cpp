@@ -1,8 +1,8 @@
 // Messages between rank 0 and the worker ranks: see distributed_transport.hpp.
 #include "distributed_transport.hpp"
 
-#include "../problems/error.hpp"
-#include "../problems/params.hpp"
+#include "../../problems/error.hpp"
+#include "../../problems/params.hpp"
 
 #include <chrono>
 #include <sstream>

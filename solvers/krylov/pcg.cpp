@@ -1,7 +1,7 @@
 #include "pcg.hpp"
 
-#include "kernels.hpp"
-#include "timer.hpp"
+#include "../kernels.hpp"
+#include "../timer.hpp"
 
 #include <cmath>
 

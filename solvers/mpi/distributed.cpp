@@ -3,12 +3,12 @@
 #include "distributed.hpp"
 #include "distributed_transport.hpp"
 
-#include "factories.hpp"
-#include "kernels.hpp"
-#include "timer.hpp"
+#include "../factories.hpp"
+#include "../kernels.hpp"
+#include "../timer.hpp"
 
-#include "../problems/error.hpp"
-#include "../problems/params.hpp"
+#include "../../problems/error.hpp"
+#include "../../problems/params.hpp"
 
 #include <cmath>
 #include <cstdlib>

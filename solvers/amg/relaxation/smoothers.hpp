@@ -12,9 +12,9 @@
 // values-only refresh warm-starts it from the previous dominant vector.
 #pragma once
 
-#include "../../problems/sparse.hpp"
-#include "../coloring.hpp"
-#include "nodal.hpp"
+#include "../../../problems/sparse.hpp"
+#include "../../coloring.hpp"
+#include "../nodal.hpp"
 
 #include <memory>
 #include <string>

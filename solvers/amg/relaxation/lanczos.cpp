@@ -1,6 +1,6 @@
 #include "lanczos.hpp"
 
-#include "../kernels.hpp"
+#include "../../kernels.hpp"
 
 #include <Eigen/Dense>
 

@@ -2,8 +2,8 @@
 
 #include "lanczos.hpp"
 
-#include "../../problems/error.hpp"
-#include "../kernels.hpp"
+#include "../../../problems/error.hpp"
+#include "../../kernels.hpp"
 #include "smoothers.hpp"
 
 #include <Eigen/Eigenvalues>

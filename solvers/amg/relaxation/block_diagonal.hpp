@@ -4,7 +4,7 @@
 // block is far from diagonal (stretched tets, cloth edges at an angle to the axes).
 #pragma once
 
-#include "nodal.hpp"
+#include "../nodal.hpp"
 
 #include <vector>
 

@@ -1,10 +1,10 @@
 // The iterative baselines: plain CG and Jacobi (diagonally) preconditioned CG.
-#include "factories.hpp"
-#include "kernels.hpp"
+#include "../factories.hpp"
+#include "../kernels.hpp"
 #include "pcg.hpp"
-#include "timer.hpp"
+#include "../timer.hpp"
 
-#include "../problems/params.hpp"
+#include "../../problems/params.hpp"
 
 namespace xb {
 
