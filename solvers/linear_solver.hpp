@@ -102,6 +102,7 @@ struct MethodInfo {
   bool available = true;   // false when the library was not built in
   std::string reason;      // why it is unavailable
   std::string description;
+  bool distributed = false;  // hypre, muelu: runs on every MPI rank (solvers/mpi/)
 };
 const std::vector<MethodInfo>& methods();
 const MethodInfo* find_method(const std::string& name);

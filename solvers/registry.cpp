@@ -1,4 +1,5 @@
 #include "factories.hpp"
+#include "mpi/distributed.hpp"
 
 #include "../problems/error.hpp"
 
@@ -16,6 +17,9 @@ namespace {
 struct Entry {
   MethodInfo info;
   std::unique_ptr<LinearSolver> (*make)(const Params&);
+  // What every MPI rank runs, for the distributed methods (solvers/mpi/): the worker ranks ask
+  // the registry for it by name.
+  std::unique_ptr<DistributedKernel> (*kernel)(const Params&) = nullptr;
 };
 
 const std::vector<Entry>& entries() {
@@ -28,14 +32,14 @@ const std::vector<Entry>& entries() {
       {{"jacobi-pcg", false, true, "", "Jacobi-preconditioned conjugate gradients on the global system"}, make_jacobi_pcg},
       {{"mgpbd", false, true, "", "MGPBD: CG preconditioned by one V-cycle of in-house unsmoothed-aggregation AMG, lazy setup"}, make_mgpbd},
 #ifdef XB_WITH_HYPRE
-      {{"hypre", false, true, "", "hypre BoomerAMG-preconditioned PCG (MPI: rows in contiguous blocks)"}, make_hypre},
+      {{"hypre", false, true, "", "hypre BoomerAMG-preconditioned PCG (MPI: rows in contiguous blocks)", true}, make_hypre, make_hypre_kernel},
 #else
-      {{"hypre", false, false, "built without hypre (XB_WITH_HYPRE=OFF or hypre not found)", "hypre BoomerAMG-PCG"}, nullptr},
+      {{"hypre", false, false, "built without hypre (XB_WITH_HYPRE=OFF or hypre not found)", "hypre BoomerAMG-PCG", true}, nullptr},
 #endif
 #ifdef XB_WITH_MUELU
-      {{"muelu", false, true, "", "Trilinos MueLu-preconditioned Belos CG on Tpetra (MPI: rows in contiguous blocks)"}, make_muelu},
+      {{"muelu", false, true, "", "Trilinos MueLu-preconditioned Belos CG on Tpetra (MPI: rows in contiguous blocks)", true}, make_muelu, make_muelu_kernel},
 #else
-      {{"muelu", false, false, "built without Trilinos MueLu (XB_WITH_MUELU=OFF or MueLu/Belos/Tpetra not found)", "Trilinos MueLu-CG"}, nullptr},
+      {{"muelu", false, false, "built without Trilinos MueLu (XB_WITH_MUELU=OFF or MueLu/Belos/Tpetra not found)", "Trilinos MueLu-CG", true}, nullptr},
 #endif
   };
   return e;
@@ -68,6 +72,17 @@ std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const 
   for (const auto& e : entries())
     if (e.make) valid += (valid.empty() ? "" : ", ") + e.info.name;
   throw Error("unknown linear solver '" + name + "' (valid: " + valid + ")");
+}
+
+bool method_is_distributed(const std::string& name) {
+  const MethodInfo* m = find_method(name);
+  return m && m->distributed;
+}
+
+std::unique_ptr<DistributedKernel> make_distributed_kernel(const std::string& name, const Params& p) {
+  for (const auto& e : entries())
+    if (e.info.name == name && e.kernel) return e.kernel(p);
+  throw Error("solver '" + name + "' has no distributed kernel in this build");
 }
 
 }  // namespace xb

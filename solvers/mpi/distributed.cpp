@@ -83,20 +83,7 @@ std::map<std::string, std::vector<double>> DistributedKernel::array_statistics()
   return {{"level_rows", level_rows_}, {"level_nnz", level_nnz_}};
 }
 
-bool method_is_distributed(const std::string& name) { return name == "hypre" || name == "muelu"; }
-
 namespace {
-
-std::unique_ptr<DistributedKernel> make_kernel(const std::string& name, const Params& p) {
-#ifdef XB_WITH_HYPRE
-  if (name == "hypre") return make_hypre_kernel(p);
-#endif
-#ifdef XB_WITH_MUELU
-  if (name == "muelu") return make_muelu_kernel(p);
-#endif
-  (void)p;
-  throw Error("solver '" + name + "' has no distributed kernel in this build");
-}
 
 long long g_next_id = 1;
 
@@ -113,7 +100,7 @@ class DistributedSolver final : public LinearSolver {
       bcast_string(n);
       bcast_string(text);
     }
-    kernel_ = make_kernel(name, p);
+    kernel_ = make_distributed_kernel(name, p);
   }
   ~DistributedSolver() override {
     if (mpi_size() > 1) {
@@ -249,7 +236,7 @@ int serve_workers() {
           std::string name, text;
           bcast_string(name);
           bcast_string(text);
-          kernels[id] = make_kernel(name, deserialize_params(text));
+          kernels[id] = make_distributed_kernel(name, deserialize_params(text));
           break;
         }
         case kSetup: {

@@ -70,8 +70,11 @@ class DistributedKernel {
   std::vector<double> level_rows_, level_nnz_;
 };
 
-// Whether a method can run with more than one MPI process (hypre, muelu).
+// Whether a method can run with more than one MPI process (hypre, muelu), and its kernel: both
+// asked of the one registry (solvers/registry.cpp). The kernel throws xb::Error for a method
+// without one in this build.
 bool method_is_distributed(const std::string& name);
+std::unique_ptr<DistributedKernel> make_distributed_kernel(const std::string& name, const Params& p);
 
 // Kernel constructors (solvers/mpi/hypre.cpp, solvers/mpi/muelu.cpp), only when built in.
 std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p);
