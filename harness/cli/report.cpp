@@ -53,14 +53,7 @@ std::string json_value(const AttrValue& v) {
 
 std::string attr_cell(const RunRecord& r, const std::string& key) {
   auto it = r.attrs.find(key);
-  if (it == r.attrs.end()) return "-";
-  if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
-  if (auto* d = std::get_if<double>(&it->second)) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.3g", *d);
-    return b;
-  }
-  return std::get<std::string>(it->second);
+  return it == r.attrs.end() ? "-" : attr_value_text(it->second, 3);
 }
 
 namespace {

@@ -24,6 +24,10 @@ struct RunRecord {
 
 constexpr int schema_version = 1;
 
+// An attribute as text: integers and strings as they are, doubles with `digits` significant
+// digits (17 reads back bit for bit; 3 for table cells).
+std::string attr_value_text(const AttrValue& v, int digits);
+
 // Appends `runs` to `path` atomically. fresh = true starts a new file (replacing an old one
 // only when the new one is complete).
 void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh = false);

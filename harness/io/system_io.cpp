@@ -105,14 +105,7 @@ void write_text_atomically(const std::string& path, const std::function<void(std
 
 std::string attr_text(const std::map<std::string, AttrValue>& attrs, const std::string& key) {
   auto it = attrs.find(key);
-  if (it == attrs.end()) return "";
-  if (auto* i = std::get_if<long long>(&it->second)) return std::to_string(*i);
-  if (auto* d = std::get_if<double>(&it->second)) {
-    char b[64];
-    std::snprintf(b, sizeof b, "%.17g", *d);
-    return b;
-  }
-  return std::get<std::string>(it->second);
+  return it == attrs.end() ? "" : attr_value_text(it->second, 17);
 }
 
 SparseMatrix jacobian_csr(const ConstraintGraph& graph, const Gradients& grad) {
