@@ -12,7 +12,7 @@
 #include "../harness/cli/run_setup.hpp"
 #include "../harness/sim/capture.hpp"
 #include "../harness/io/system_io.hpp"
-#include "../problems/error.hpp"
+#include "../core/error.hpp"
 #include "../problems/scene.hpp"
 #include "../solvers/kernels.hpp"
 #include "../solvers/linear_solver.hpp"
@@ -123,7 +123,7 @@ void BM_mgpbd_refresh(benchmark::State& st) {
 #ifdef XB_BENCH_HAVE_AMG
 void BM_mgpbd_vcycle(benchmark::State& st) {
   xb::amg::Hierarchy h;
-  h.setup(sys->A, xb::amg::AmgOptions::from_params(sys->p));
+  h.setup(sys->A, xb::amg::AmgOptions::from_settings(sys->p));
   xb::Vector x;
   for (auto _ : st) {
     h.vcycle(sys->b, x);
@@ -192,7 +192,7 @@ int main(int argc, char** argv) {
   benchmark::AddCustomContext("rows", std::to_string(s.A.rows()));
   benchmark::AddCustomContext("nnz", std::to_string(s.A.nonZeros()));
   char tol[32];
-  std::snprintf(tol, sizeof tol, "%g", s.p.linear_tol);
+  std::snprintf(tol, sizeof tol, "%g", s.p.linear.tol);
   benchmark::AddCustomContext("linear.tol", tol);
   benchmark::AddCustomContext("omp_threads", std::to_string(omp_get_max_threads()));
 

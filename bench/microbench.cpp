@@ -13,7 +13,7 @@
 #include "../harness/perf/perf_common.hpp"
 
 #include "../problems/dual_system.hpp"
-#include "../problems/error.hpp"
+#include "../core/error.hpp"
 #include "../problems/scene.hpp"
 #include "../solvers/kernels.hpp"
 #include "../solvers/linear_solver.hpp"
@@ -125,7 +125,7 @@ void bm_spmv(benchmark::State& st, SceneCase c) {
 // One outer iteration of a local method: constraints at x, then one sweep (as the stepper does).
 void bm_local(benchmark::State& st, std::string method, SceneCase c) {
   Case& k = get_case(c);
-  xb::LocalMethod local(*k.prob, *k.ds, k.p, method == "xpbd-gs");
+  xb::LocalMethod local(*k.prob, *k.ds, k.p.xpbd, method == "xpbd-gs");
   Eigen::Matrix3Xd x = k.x_pred;
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(k.prob->num_constraints());
   xb::ConstraintState s;
@@ -186,7 +186,7 @@ void bm_smoother(benchmark::State& st, std::string kind, SceneCase c) {
 void bm_vcycle(benchmark::State& st, SceneCase c) {
   Case& k = get_case(c);
   xb::amg::Hierarchy h;
-  h.setup(k.sys.A, xb::amg::AmgOptions::from_params(k.p));
+  h.setup(k.sys.A, xb::amg::AmgOptions::from_settings(k.p));
   xb::Vector x;
   for (auto _ : st) {
     h.vcycle(k.sys.b, x);
@@ -199,7 +199,7 @@ void bm_vcycle(benchmark::State& st, SceneCase c) {
 void bm_amg_setup(benchmark::State& st, SceneCase c, bool refresh) {
   Case& k = get_case(c);
   xb::amg::Hierarchy h;
-  const auto opt = xb::amg::AmgOptions::from_params(k.p);
+  const auto opt = xb::amg::AmgOptions::from_settings(k.p);
   h.setup(k.sys.A, opt);
   for (auto _ : st) {
     if (refresh)

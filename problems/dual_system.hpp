@@ -7,7 +7,7 @@
 #pragma once
 
 #include "problem.hpp"
-#include "sparse.hpp"
+#include "../core/sparse.hpp"
 
 #include <cstdint>
 #include <vector>

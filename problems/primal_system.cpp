@@ -1,6 +1,6 @@
 #include "primal_system.hpp"
 
-#include "error.hpp"
+#include "../core/error.hpp"
 #include "problem.hpp"
 
 #include <algorithm>

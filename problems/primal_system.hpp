@@ -10,7 +10,7 @@
 // Its near-kernel is the 6 rigid-body motions (rigid_modes()).
 #pragma once
 
-#include "sparse.hpp"
+#include "../core/sparse.hpp"
 
 #include <Eigen/Dense>
 

@@ -1,6 +1,6 @@
 #include "problem.hpp"
 
-#include "error.hpp"
+#include "../core/error.hpp"
 
 #include <cmath>
 #include <string>

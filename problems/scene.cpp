@@ -1,11 +1,9 @@
 #include "scene.hpp"
 
-#include "error.hpp"
+#include "../core/error.hpp"
 #include "toml_catalogue.hpp"
 #include "meshes/generators.hpp"
 #include "meshes/real_meshes.hpp"
-
-#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cmath>
@@ -24,63 +22,7 @@ std::string scene_dir() { return scenes.dir(); }
 std::vector<std::string> scene_names() { return scenes.names(); }
 std::string resolve_scene(const std::string& name_or_file) { return scenes.resolve(name_or_file); }
 
-namespace {
-std::string node_text(const toml::node& n, const std::string& where) {
-  if (auto s = n.as_string()) return s->get();
-  if (auto i = n.as_integer()) return std::to_string(i->get());
-  if (auto d = n.as_floating_point()) {
-    std::ostringstream os;
-    os.precision(17);
-    os << d->get();
-    return os.str();
-  }
-  if (auto b = n.as_boolean()) return b->get() ? "1" : "0";
-  throw Error(where + ": unsupported value type (use a number or a string)");
-}
-
-void flatten(const toml::table& t, const std::string& prefix, const std::string& path, std::vector<TomlEntry>& out) {
-  for (const auto& [k, v] : t) {
-    const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
-    const int line = static_cast<int>(v.source().begin.line);
-    const std::string where = path + ":" + std::to_string(line);
-    if (auto sub = v.as_table()) {
-      flatten(*sub, key, path, out);
-    } else if (auto arr = v.as_array()) {
-      TomlEntry e{key, "", line, true, {}};
-      for (const auto& item : *arr) e.items.push_back(node_text(item, where + ": '" + key + "'"));
-      out.push_back(e);
-    } else {
-      out.push_back({key, node_text(v, where + ": '" + key + "'"), line, false, {}});
-    }
-  }
-}
-}  // namespace
-
-std::vector<TomlEntry> read_toml_flat(const std::string& path) {
-  if (!fs::is_regular_file(path)) throw Error(path + ": no such file");
-  toml::table t;
-  try {
-    t = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": malformed TOML: " << e.description();
-    throw Error(os.str());
-  }
-  std::vector<TomlEntry> out;
-  flatten(t, "", path, out);
-  std::sort(out.begin(), out.end(), [](const TomlEntry& a, const TomlEntry& b) { return a.line < b.line; });
-  return out;
-}
-
-void load_scene_file(const std::string& path, Params& p) {
-  for (const auto& e : read_toml_flat(path)) {
-    const std::string where = path + ":" + std::to_string(e.line);
-    if (e.is_array) throw Error(where + ": '" + e.key + "' must be a single value, not a list");
-    set_param(p, e.key, e.value, where);
-  }
-}
-
-Problem make_tet_problem(const std::string& name, const TetMesh& mesh, const Params& p) {
+Problem make_tet_problem(const std::string& name, const TetMesh& mesh, const SceneSettings& p) {
   Problem prob;
   prob.name = name;
   const int n = static_cast<int>(mesh.vertices.cols());
@@ -107,7 +49,7 @@ Problem make_tet_problem(const std::string& name, const TetMesh& mesh, const Par
   return prob;
 }
 
-Problem make_cloth_problem(const std::string& name, const TriMesh& mesh, const Params& p) {
+Problem make_cloth_problem(const std::string& name, const TriMesh& mesh, const SceneSettings& p) {
   Problem prob;
   prob.name = name;
   const int n = static_cast<int>(mesh.vertices.cols());
@@ -129,7 +71,7 @@ namespace {
 
 // The paper's Fig. 8: a horizontal N×N cloth at y = 0.5 under gravity, pinned at vertices N
 // and NV−1 as in the authors' code: the two corners (i = 0, k = N) and (i = N, k = N).
-Problem build_cloth_hang(const Params& p) {
+Problem build_cloth_hang(const SceneSettings& p) {
   const int N = p.resolution;
   TriMesh m = make_cloth_grid(N, p.size, 0.5);
   if (p.variant == "near_degenerate") flatten_some_triangles(m);
@@ -140,7 +82,7 @@ Problem build_cloth_hang(const Params& p) {
 }
 
 // A cantilever: a bar of (aspect·r)×r×r cubes along x, its x = 0 end pinned, under gravity.
-Problem build_bar_hang(const Params& p) {
+Problem build_bar_hang(const SceneSettings& p) {
   const int r = p.resolution;
   const double h = p.size / r;
   TetMesh m = make_tet_bar(p.aspect * r, r, r, h);
@@ -163,7 +105,7 @@ void scale_to_height(TetMesh& m, double height) {
   m.vertices *= height / extent;
 }
 
-Problem tet_scene(const std::string& name, const Params& p, const std::string& fallback_mesh, TetMesh* mesh_out = nullptr) {
+Problem tet_scene(const std::string& name, const SceneSettings& p, const std::string& fallback_mesh, TetMesh* mesh_out = nullptr) {
   MeshReadReport report;
   TetMesh m = load_tet_mesh(p.mesh, p, fallback_mesh, &report);
   if (p.mesh_height > 0) scale_to_height(m, p.mesh_height);
@@ -177,7 +119,7 @@ Problem tet_scene(const std::string& name, const Params& p, const std::string& f
 // The rest shape is the mesh itself, so every tet starts flat (σ₃ = 0, C = 1).
 // init = enlarge instead starts from the rest mesh scaled ×1.5 about its centroid (the authors'
 // `enlarge` reinit of the same scene; their near-kernel table is its first solve).
-Problem build_squash(const Params& p) {
+Problem build_squash(const SceneSettings& p) {
   Problem prob = tet_scene("squash", p, "ball");
   Eigen::Matrix3Xd& x = prob.particles.x;
   if (p.init == "enlarge") {
@@ -192,7 +134,7 @@ Problem build_squash(const Params& p) {
 
 // A bar (aspect·r × r × r cubes) twisted about its long (x) axis by `twist` rad end to end,
 // released with no gravity.
-Problem build_twist_bar(const Params& p) {
+Problem build_twist_bar(const SceneSettings& p) {
   Problem prob = tet_scene("twist_bar", p, "bar");
   Eigen::Matrix3Xd& x = prob.particles.x;
   const double x0 = x.row(0).minCoeff(), len = x.row(0).maxCoeff() - x0;
@@ -208,7 +150,7 @@ Problem build_twist_bar(const Params& p) {
 
 // The authors' `reinit=beam`: a bar with its left 1% (by x extent, at least the x = min face)
 // fixed, under gravity.
-Problem build_cantilever(const Params& p) {
+Problem build_cantilever(const SceneSettings& p) {
   Problem prob = tet_scene("cantilever", p, "bar");
   const Eigen::Matrix3Xd& x = prob.particles.x;
   const double x0 = x.row(0).minCoeff(), len = x.row(0).maxCoeff() - x0;
@@ -219,7 +161,7 @@ Problem build_cantilever(const Params& p) {
 
 // A tet ball resting 1 cm above the ground plane y = 0 (the only scene with a collider), falling
 // under gravity; particles below the plane are projected onto it, as the paper does.
-Problem build_ball_drop(const Params& p) {
+Problem build_ball_drop(const SceneSettings& p) {
   Problem prob = tet_scene("ball_drop", p, "ball");
   Eigen::Matrix3Xd& x = prob.particles.x;
   const double lift = 0.01 - x.row(1).minCoeff();
@@ -231,7 +173,7 @@ Problem build_ball_drop(const Params& p) {
 // A chain of `resolution` links of total length `size` along x, its first particle pinned,
 // released horizontally under gravity. Particle masses grow with index as i² up to mass_ratio
 // (build_problem grades them; the authors' cloth3d setup_num=2 tests this).
-Problem build_mass_chain(const Params& p) {
+Problem build_mass_chain(const SceneSettings& p) {
   const int n = p.resolution + 1;
   TriMesh m;
   m.vertices.resize(3, n);
@@ -298,7 +240,7 @@ void flatten_some_triangles(TriMesh& m) {
   }
 }
 
-void apply_variant(const Params& p, Problem& prob) {
+void apply_variant(const SceneSettings& p, Problem& prob) {
   if (p.variant == "rigid") {
     // Infinite stiffness (Goldenthal's method): every constraint has α = 0. With redundant
     // constraints A = ∇C M⁻¹ ∇Cᵀ is singular, which a global solver must report.
@@ -328,7 +270,7 @@ const std::vector<BuilderInfo>& scene_builders() {
   return b;
 }
 
-Problem build_problem(const Params& p) {
+Problem build_problem(const SceneSettings& p) {
   validate(p);
   // Scene keys that only some builders read are refused elsewhere rather than silently ignored.
   const bool mesh_scene = p.scene == "squash" || p.scene == "twist_bar" || p.scene == "cantilever" || p.scene == "ball_drop";

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "meshes/mesh.hpp"
-#include "params.hpp"
+#include "scene_settings.hpp"
 #include "problem.hpp"
 
 #include <functional>
@@ -20,20 +20,8 @@ std::vector<std::string> scene_names();
 // valid names for an unknown one.
 std::string resolve_scene(const std::string& name_or_file);
 
-// Reads a TOML spec (nested tables flatten to dotted keys: [amg] strength_threshold → 
-// amg.strength_threshold) and sets every key in p. Errors name the file and line.
-void load_scene_file(const std::string& path, Params& p);
-// Flattened (key, value-as-text, line) triples of a TOML table file; used by scene and sweep specs.
-struct TomlEntry {
-  std::string key, value;
-  int line;
-  bool is_array;
-  std::vector<std::string> items;  // for arrays
-};
-std::vector<TomlEntry> read_toml_flat(const std::string& path);
-
 // The builders by name.
-using SceneBuilder = std::function<Problem(const Params&)>;
+using SceneBuilder = std::function<Problem(const SceneSettings&)>;
 struct BuilderInfo {
   std::string name;
   std::string description;
@@ -41,7 +29,7 @@ struct BuilderInfo {
 };
 const std::vector<BuilderInfo>& scene_builders();
 // Builds p.scene's Problem; throws xb::Error for an unknown builder or a broken problem.
-Problem build_problem(const Params& p);
+Problem build_problem(const SceneSettings& p);
 
 // Extreme cases (the `variant` key; apply_variant_keys in params.hpp sets the keys they imply):
 //   rigid            all compliances 0 (infinite stiffness, Goldenthal's method)
@@ -52,7 +40,7 @@ Problem build_problem(const Params& p);
 //                    mass_chain: every 10th link 1e-3 as long as the others
 // apply_variant does the part that acts on a built Problem (rigid; the mass grading of
 // mass_ratio, which mass_chain and mass_ratio_1e4 use). build_problem calls it.
-void apply_variant(const Params& p, Problem& prob);
+void apply_variant(const SceneSettings& p, Problem& prob);
 // Every 50th tet flattened to 1e-3 of its height (its last vertex moved towards the opposite
 // face) where that inverts no neighbour; the rest shape is this flattened mesh.
 void flatten_some_tets(TetMesh& mesh);
@@ -61,8 +49,8 @@ void flatten_some_triangles(TriMesh& mesh);
 
 // Shared construction steps.
 // Tets: one ARAP constraint per tet, α = 1/(μ V_rest), particle_mass per particle.
-Problem make_tet_problem(const std::string& name, const TetMesh& mesh, const Params& p);
+Problem make_tet_problem(const std::string& name, const TetMesh& mesh, const SceneSettings& p);
 // Cloth: one distance constraint per edge, uniform compliance.
-Problem make_cloth_problem(const std::string& name, const TriMesh& mesh, const Params& p);
+Problem make_cloth_problem(const std::string& name, const TriMesh& mesh, const SceneSettings& p);
 
 }  // namespace xb

@@ -1,6 +1,6 @@
 #include "toml_catalogue.hpp"
 
-#include "error.hpp"
+#include "../core/error.hpp"
 
 #include <algorithm>
 #include <cstdlib>

@@ -2,7 +2,7 @@
 // method parallelised over colours gives the same result for every thread count.
 #pragma once
 
-#include "../problems/sparse.hpp"
+#include "../core/sparse.hpp"
 
 #include <vector>
 

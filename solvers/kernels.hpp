@@ -1,7 +1,7 @@
 // Parallel (OpenMP) sparse and vector kernels on the raw CSR arrays.
 #pragma once
 
-#include "../problems/sparse.hpp"
+#include "../core/sparse.hpp"
 
 namespace xb {
 

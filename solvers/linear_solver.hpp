@@ -4,7 +4,7 @@
 // optional near-kernel basis and vectors.
 #pragma once
 
-#include "../problems/sparse.hpp"
+#include "../core/sparse.hpp"
 
 #include <Eigen/Dense>
 
@@ -16,7 +16,7 @@
 
 namespace xb {
 
-struct Params;
+struct SolverSettings;
 
 // What changed since the previous setup() call.
 //  Structure: a new sparsity pattern (or the first call): analyse/coarsen from scratch.
@@ -108,6 +108,6 @@ const std::vector<MethodInfo>& methods();
 const MethodInfo* find_method(const std::string& name);
 
 // Throws xb::Error for an unknown or unavailable name.
-std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const Params& p);
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const SolverSettings& p);
 
 }  // namespace xb

@@ -1,7 +1,7 @@
 #include "factories.hpp"
 #include "mpi/distributed.hpp"
 
-#include "../problems/error.hpp"
+#include "../core/error.hpp"
 
 namespace xb {
 
@@ -16,10 +16,10 @@ const char* to_string(LinearStatus s) {
 namespace {
 struct Entry {
   MethodInfo info;
-  std::unique_ptr<LinearSolver> (*make)(const Params&);
+  std::unique_ptr<LinearSolver> (*make)(const SolverSettings&);
   // What every MPI rank runs, for the distributed methods (solvers/mpi/): the worker ranks ask
   // the registry for it by name.
-  std::unique_ptr<DistributedKernel> (*kernel)(const Params&) = nullptr;
+  std::unique_ptr<DistributedKernel> (*kernel)(const SolverSettings&) = nullptr;
 };
 
 const std::vector<Entry>& entries() {
@@ -61,7 +61,7 @@ const MethodInfo* find_method(const std::string& name) {
   return nullptr;
 }
 
-std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const Params& p) {
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const SolverSettings& p) {
   for (const auto& e : entries()) {
     if (e.info.name != name) continue;
     if (!e.info.available) throw Error("solver '" + name + "' is not available: " + e.info.reason);
@@ -79,7 +79,7 @@ bool method_is_distributed(const std::string& name) {
   return m && m->distributed;
 }
 
-std::unique_ptr<DistributedKernel> make_distributed_kernel(const std::string& name, const Params& p) {
+std::unique_ptr<DistributedKernel> make_distributed_kernel(const std::string& name, const SolverSettings& p) {
   for (const auto& e : entries())
     if (e.info.name == name && e.kernel) return e.kernel(p);
   throw Error("solver '" + name + "' has no distributed kernel in this build");

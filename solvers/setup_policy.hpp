@@ -7,7 +7,7 @@
 
 #include "linear_solver.hpp"
 
-#include "../problems/error.hpp"
+#include "../core/error.hpp"
 
 namespace xb {
 

@@ -1,6 +1,6 @@
 #include "args.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <cmath>
 #include <cstdlib>

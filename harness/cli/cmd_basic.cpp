@@ -7,7 +7,7 @@
 #include "../io/mesh_writer.hpp"
 #include "../io/state_io.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
 
@@ -27,6 +27,9 @@ int cmd_list(const CommandArgs& argv) {
     if (!m.available) std::cout << "  unavailable: " << m.reason;
     std::cout << "\n";
   }
+  std::cout << "parameters (key = default: doc):\n";
+  const Params defaults;
+  for (const auto& f : param_fields()) std::cout << "  " << f.key << " = " << param_to_string(defaults, f) << ": " << f.doc << "\n";
   return 0;
 }
 

@@ -10,7 +10,7 @@
 #include "../io/run_record.hpp"
 #include "../io/system_io.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/kernels.hpp"
 #include "../../solvers/linear_solver.hpp"
@@ -178,7 +178,7 @@ SolveOutcome solve_one(const CapturedSystem& sys, const std::string& name, const
     auto solver = make_linear_solver(name, q);
     Timer t;
     if (form == "primal") {
-      PrimalSolve primal(std::move(solver), sys.graph, q.linear_tol);
+      PrimalSolve primal(std::move(solver), sys.graph, q.linear.tol);
       primal.setup(sys.grad, sys.alpha_tilde, sys.x, SetupKind::Structure, SetupContext{});
       o.setup_time = t.seconds();
       t.reset();

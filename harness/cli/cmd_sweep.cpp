@@ -9,7 +9,7 @@
 #include "../io/run_record.hpp"
 #include "sweep.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/timer.hpp"
 

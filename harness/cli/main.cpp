@@ -2,7 +2,7 @@
 // and exit code 2; nothing already written is lost.
 #include "commands.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../solvers/mpi/distributed.hpp"
 
 #include <mpi.h>

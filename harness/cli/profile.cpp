@@ -1,6 +1,7 @@
 #include "profile.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
+#include "../../core/toml_flat.hpp"
 #include "../../problems/scene.hpp"
 #include "../../problems/toml_catalogue.hpp"
 

@@ -4,7 +4,7 @@
 // profile can say "the bunny squash at 0.2 m" without breaking the other scenes.
 #pragma once
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 
 #include <string>
 #include <vector>

@@ -2,7 +2,7 @@
 
 #include "../io/recorder.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 
 #include "profile.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/mpi/distributed.hpp"
 #include "../../solvers/linear_solver.hpp"

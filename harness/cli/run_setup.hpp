@@ -2,7 +2,7 @@
 // scene ← profile ← --set) and the method list (--solver × --form).
 #pragma once
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 
 #include <string>
 #include <vector>

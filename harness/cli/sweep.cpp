@@ -5,7 +5,8 @@
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
+#include "../../core/toml_flat.hpp"
 #include "../../problems/scene.hpp"
 
 #include <algorithm>

@@ -18,7 +18,7 @@
 //   grid.resolution = [16, 32, 64]      #   to those of [set] / [grid]
 #pragma once
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 
 #include <string>
 #include <utility>

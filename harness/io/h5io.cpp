@@ -1,6 +1,6 @@
 #include "h5io.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <vector>
 

@@ -1,6 +1,6 @@
 #include "mesh_writer.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <bit>
 #include <cstdint>

@@ -6,7 +6,7 @@
 
 #include "../sim/stepper.hpp"
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 
 #include <string>
 

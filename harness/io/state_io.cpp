@@ -4,7 +4,7 @@
 #include "run_record.hpp"
 #include "h5io.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <filesystem>
 

@@ -3,7 +3,7 @@
 // from one identical state. The file format is in results/README.md ("State checkpoints").
 #pragma once
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 
 #include <Eigen/Dense>
 

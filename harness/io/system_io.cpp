@@ -2,7 +2,7 @@
 
 #include "h5io.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <hdf5.h>
 

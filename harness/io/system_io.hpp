@@ -17,7 +17,7 @@
 #include "recorder.hpp"
 
 #include "../../problems/primal_system.hpp"
-#include "../../problems/sparse.hpp"
+#include "../../core/sparse.hpp"
 
 #include <map>
 #include <string>

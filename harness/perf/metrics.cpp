@@ -11,7 +11,7 @@
 // --cases keeps only the named cases of the fixed set (e.g. cloth_hang/r16): for fast tests.
 #include "perf_common.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
 #include "../cli/args.hpp"

@@ -1,6 +1,6 @@
 #include "perf_common.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
 #include "../cli/run_setup.hpp"

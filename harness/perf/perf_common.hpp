@@ -3,8 +3,8 @@
 // captured systems and scenes, and how a system is captured.
 #pragma once
 
-#include "../../problems/params.hpp"
-#include "../../problems/sparse.hpp"
+#include "../params.hpp"
+#include "../../core/sparse.hpp"
 #include "../io/system_io.hpp"
 
 #include <string>

@@ -2,7 +2,7 @@
 
 #include "stepper.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
 
 #include <algorithm>

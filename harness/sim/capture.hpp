@@ -5,7 +5,7 @@
 
 #include "../io/system_io.hpp"
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 
 #include <string>
 

@@ -1,6 +1,6 @@
 #include "primal_solve.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../solvers/kernels.hpp"
 #include "../../solvers/timer.hpp"
 

@@ -1,6 +1,6 @@
 #include "reference.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <cmath>
 

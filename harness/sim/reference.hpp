@@ -7,7 +7,7 @@
 #pragma once
 
 #include "../../problems/dual_system.hpp"
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 #include "../../problems/problem.hpp"
 #include "../../solvers/linear_solver.hpp"
 

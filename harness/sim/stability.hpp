@@ -7,7 +7,7 @@
 // kept as a dataset; it does not end a run (squash starts with every tet flat).
 #pragma once
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 #include "../../problems/problem.hpp"
 
 #include <string>

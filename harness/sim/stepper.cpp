@@ -7,7 +7,7 @@
 #include "reference.hpp"
 
 #include "../../problems/dual_system.hpp"
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../../solvers/linear_solver.hpp"
 #include "../../solvers/timer.hpp"
 #include "../../solvers/local/xpbd_local.hpp"
@@ -123,12 +123,12 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
     res_.reference_time += ref_clock.seconds();
   }
   if (find_method(method)->local) {
-    local_.emplace(prob_, ds_, p, local_kind(method));
+    local_.emplace(prob_, ds_, p.xpbd, local_kind(method));
     res_.form_used = "none";
   } else {
     res_.form_used = resolve_form(p.form, alpha_tilde_);
     if (res_.form_used == "primal")
-      primal_.emplace(make_linear_solver(method, p), constraint_graph(prob_), p.linear_tol);
+      primal_.emplace(make_linear_solver(method, p), constraint_graph(prob_), p.linear.tol);
     else
       solver_ = make_linear_solver(method, p);
     active_ = primal_ ? &primal_->solver() : solver_.get();

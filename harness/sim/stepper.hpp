@@ -8,9 +8,9 @@
 // A failed run is a result (its status), never a crash.
 #pragma once
 
-#include "../../problems/params.hpp"
+#include "../params.hpp"
 #include "../../problems/problem.hpp"
-#include "../../problems/sparse.hpp"
+#include "../../core/sparse.hpp"
 #include "../io/state_io.hpp"
 
 #include <functional>

@@ -1,6 +1,6 @@
 #include "real_meshes.hpp"
 
-#include "../error.hpp"
+#include "../../core/error.hpp"
 #include "generators.hpp"
 
 #include <cstdlib>
@@ -82,7 +82,7 @@ TetMesh make_tet_ball(int res, double size, const Eigen::Vector3d& center) {
   return m;
 }
 
-TetMesh load_tet_mesh(const std::string& spec_in, const Params& p, const std::string& fallback, MeshReadReport* report) {
+TetMesh load_tet_mesh(const std::string& spec_in, const SceneSettings& p, const std::string& fallback, MeshReadReport* report) {
   const std::string spec = spec_in.empty() ? fallback : spec_in;
   const int r = p.resolution;
   if (spec == "bar") return make_tet_bar(p.aspect * r, r, r, p.size / r);

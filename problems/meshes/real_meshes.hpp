@@ -9,7 +9,7 @@
 
 #include "mesh.hpp"
 #include "mesh_io.hpp"
-#include "../params.hpp"
+#include "../scene_settings.hpp"
 
 #include <string>
 
@@ -30,7 +30,7 @@ TetMesh make_tet_ball(int res, double size, const Eigen::Vector3d& center);
 // The `mesh` key → a TetMesh. `fallback` is the generator used for mesh = "". Generators:
 // "bar" (aspect·r × r × r cubes of side size/r, x from 0), "ball" (diameter size, r cells across,
 // centred at the origin).
-TetMesh load_tet_mesh(const std::string& spec, const Params& p, const std::string& fallback,
+TetMesh load_tet_mesh(const std::string& spec, const SceneSettings& p, const std::string& fallback,
                       MeshReadReport* report = nullptr);
 
 }  // namespace xb

@@ -2,7 +2,7 @@
 // number parsing whose errors name FILE:LINE and what was being read.
 #pragma once
 
-#include "../error.hpp"
+#include "../../core/error.hpp"
 
 #include <charconv>
 #include <cmath>

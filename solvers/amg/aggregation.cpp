@@ -1,6 +1,6 @@
 #include "aggregation.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 namespace xb::amg {
 

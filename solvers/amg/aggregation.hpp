@@ -3,7 +3,7 @@
 // parallel MIS-2 aggregation) slots in next to the standard one.
 #pragma once
 
-#include "../../problems/sparse.hpp"
+#include "../../core/sparse.hpp"
 
 #include <string>
 #include <vector>

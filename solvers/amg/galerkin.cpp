@@ -1,6 +1,6 @@
 #include "galerkin.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <algorithm>
 #include <omp.h>

@@ -6,7 +6,7 @@
 //    weights p_i p_j; refresh() is then one parallel gather pass over A's values (no atomics).
 #pragma once
 
-#include "../../problems/sparse.hpp"
+#include "../../core/sparse.hpp"
 
 #include <vector>
 

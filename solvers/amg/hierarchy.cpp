@@ -1,30 +1,30 @@
 #include "hierarchy.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 #include "strength.hpp"
 
 #include <algorithm>
 
 namespace xb::amg {
 
-AmgOptions AmgOptions::from_params(const Params& p) {
+AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   AmgOptions o;
-  o.strength_threshold = p.amg_strength_threshold;
-  o.aggregation = p.amg_aggregation;
-  o.near_kernel.kind = p.amg_near_kernel;
-  o.near_kernel.sweeps = p.amg_near_kernel_sweeps;
-  o.near_kernel.vectors = p.amg_near_kernel_vectors;
+  o.strength_threshold = p.amg.strength_threshold;
+  o.aggregation = p.amg.aggregation;
+  o.near_kernel.kind = p.amg.near_kernel;
+  o.near_kernel.sweeps = p.amg.near_kernel_sweeps;
+  o.near_kernel.vectors = p.amg.near_kernel_vectors;
   o.near_kernel.seed = static_cast<unsigned>(p.seed);
-  o.prolongator = p.amg_prolongator;
-  o.nodal_strength_threshold = p.amg_nodal_strength_threshold;
-  o.coarse_nodal_strength_threshold = p.amg_coarse_nodal_strength_threshold;
-  o.prolongator_diagonal = p.amg_prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
-  o.smoother.kind = p.amg_smoother;
-  o.smoother.sweeps = p.amg_smoother_sweeps;
+  o.prolongator = p.amg.prolongator;
+  o.nodal_strength_threshold = p.amg.nodal_strength_threshold;
+  o.coarse_nodal_strength_threshold = p.amg.coarse_nodal_strength_threshold;
+  o.prolongator_diagonal = p.amg.prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
+  o.smoother.kind = p.amg.smoother;
+  o.smoother.sweeps = p.amg.smoother_sweeps;
   o.smoother.seed = static_cast<unsigned>(p.seed);
-  o.max_coarse = p.amg_max_coarse;
-  o.max_levels = p.amg_max_levels;
+  o.max_coarse = p.amg.max_coarse;
+  o.max_levels = p.amg.max_levels;
   return o;
 }
 

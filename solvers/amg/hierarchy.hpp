@@ -24,7 +24,7 @@
 #include <vector>
 
 namespace xb {
-struct Params;
+struct SolverSettings;
 }
 
 namespace xb::amg {
@@ -49,10 +49,10 @@ struct AmgOptions {
   SmootherOptions smoother;
   int max_coarse = 400;
   int max_levels = 10;
-  // The amg.* keys of a Params (amg.strength_threshold, amg.nodal_strength_threshold,
+  // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
   // amg.coarse_nodal_strength_threshold, amg.aggregation, amg.near_kernel*, amg.prolongator,
   // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, seed).
-  static AmgOptions from_params(const Params& p);
+  static AmgOptions from_settings(const SolverSettings& p);
 };
 
 // What amg.smoother = auto and amg.smoother_sweeps = 0 take on block systems (the primal form):

@@ -13,19 +13,19 @@
 #include "../setup_policy.hpp"
 #include "../timer.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 
 namespace xb {
 
 namespace {
 class MgpbdSolver final : public LinearSolver {
  public:
-  explicit MgpbdSolver(const Params& p)
-      : opt_(amg::AmgOptions::from_params(p)),
-        tol_(p.linear_tol),
-        maxit_(p.linear_max_iterations),
-        policy_(p.amg_setup_interval) {
+  explicit MgpbdSolver(const SolverSettings& p)
+      : opt_(amg::AmgOptions::from_settings(p)),
+        tol_(p.linear.tol),
+        maxit_(p.linear.max_iterations),
+        policy_(p.amg.setup_interval) {
     // Fail on bad names now, not at the first setup inside a run.
     amg::check_option_names(opt_);
   }
@@ -122,6 +122,6 @@ class MgpbdSolver final : public LinearSolver {
 };
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_mgpbd(const Params& p) { return std::make_unique<MgpbdSolver>(p); }
+std::unique_ptr<LinearSolver> make_mgpbd(const SolverSettings& p) { return std::make_unique<MgpbdSolver>(p); }
 
 }  // namespace xb

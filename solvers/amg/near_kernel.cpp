@@ -1,6 +1,6 @@
 #include "near_kernel.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../kernels.hpp"
 #include "relaxation/smoothers.hpp"
 

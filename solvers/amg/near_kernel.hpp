@@ -7,7 +7,7 @@
 //        (seeded, so a setup is reproducible), `vectors` of them; each column scaled to unit norm.
 #pragma once
 
-#include "../../problems/sparse.hpp"
+#include "../../core/sparse.hpp"
 #include "../coloring.hpp"
 
 #include <Eigen/Dense>

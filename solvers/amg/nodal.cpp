@@ -1,6 +1,6 @@
 #include "nodal.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "strength.hpp"
 
 #include <algorithm>

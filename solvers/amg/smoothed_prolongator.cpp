@@ -1,6 +1,6 @@
 #include "smoothed_prolongator.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "relaxation/block_diagonal.hpp"
 #include "galerkin.hpp"
 #include "relaxation/smoothers.hpp"

@@ -1,6 +1,6 @@
 #include "strength.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 #include "../kernels.hpp"
 
 #include <cmath>

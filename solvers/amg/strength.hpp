@@ -3,7 +3,7 @@
 // stored entry. The result S has A's values on the kept entries; aggregation reads its pattern.
 #pragma once
 
-#include "../../problems/sparse.hpp"
+#include "../../core/sparse.hpp"
 
 namespace xb::amg {
 

@@ -1,6 +1,6 @@
 #include "tentative.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,8 +5,8 @@
 #include "../kernels.hpp"
 #include "../timer.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 
 #include <cholmod.h>
 
@@ -123,6 +123,6 @@ class CholmodSolver final : public LinearSolver {
 };
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_cholmod(const Params&) { return std::make_unique<CholmodSolver>(); }
+std::unique_ptr<LinearSolver> make_cholmod(const SolverSettings&) { return std::make_unique<CholmodSolver>(); }
 
 }  // namespace xb

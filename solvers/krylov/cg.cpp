@@ -4,14 +4,14 @@
 #include "pcg.hpp"
 #include "../timer.hpp"
 
-#include "../../problems/params.hpp"
+#include "../solver_settings.hpp"
 
 namespace xb {
 
 namespace {
 class CgSolver final : public LinearSolver {
  public:
-  CgSolver(const Params& p, bool jacobi) : tol_(p.linear_tol), maxit_(p.linear_max_iterations), jacobi_(jacobi) {}
+  CgSolver(const SolverSettings& p, bool jacobi) : tol_(p.linear.tol), maxit_(p.linear.max_iterations), jacobi_(jacobi) {}
   std::string name() const override { return jacobi_ ? "jacobi-pcg" : "cg"; }
 
   void setup(const SparseMatrix& A, SetupKind, const SetupContext&) override {
@@ -54,7 +54,7 @@ class CgSolver final : public LinearSolver {
 };
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_cg(const Params& p) { return std::make_unique<CgSolver>(p, false); }
-std::unique_ptr<LinearSolver> make_jacobi_pcg(const Params& p) { return std::make_unique<CgSolver>(p, true); }
+std::unique_ptr<LinearSolver> make_cg(const SolverSettings& p) { return std::make_unique<CgSolver>(p, false); }
+std::unique_ptr<LinearSolver> make_jacobi_pcg(const SolverSettings& p) { return std::make_unique<CgSolver>(p, true); }
 
 }  // namespace xb

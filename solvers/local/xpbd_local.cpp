@@ -1,6 +1,6 @@
 #include "xpbd_local.hpp"
 
-#include "../../problems/error.hpp"
+#include "../../core/error.hpp"
 
 #include <algorithm>
 
@@ -18,11 +18,11 @@ LocalKind local_kind(const std::string& method) {
   throw Error("'" + method + "' is not a local method (valid: xpbd-jacobi, xpbd-gs, xpbd-authors)");
 }
 
-LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, LocalKind kind)
-    : prob_(prob), ds_(ds), kind_(kind), gs_(kind == LocalKind::gauss_seidel), relaxation_(p.jacobi_relaxation) {
+LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const XpbdSettings& s, LocalKind kind)
+    : prob_(prob), ds_(ds), kind_(kind), gs_(kind == LocalKind::gauss_seidel), relaxation_(s.jacobi_relaxation) {
   if (gs_) coloring_ = greedy_coloring(ds.A());
   if (kind_ == LocalKind::authors) {
-    relaxation_ = p.position_relaxation;
+    relaxation_ = s.position_relaxation;
   } else if (relaxation_ == 0) {
     int n_max = 1;
     const auto& start = ds.incidence_start();

@@ -21,7 +21,7 @@
 #pragma once
 
 #include "../../problems/dual_system.hpp"
-#include "../../problems/params.hpp"
+#include "xpbd_settings.hpp"
 #include "../../problems/problem.hpp"
 #include "../coloring.hpp"
 
@@ -33,9 +33,9 @@ LocalKind local_kind(const std::string& method);
 
 class LocalMethod {
  public:
-  LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, LocalKind kind);
-  LocalMethod(const Problem& prob, const DualSystem& ds, const Params& p, bool gauss_seidel)
-      : LocalMethod(prob, ds, p, gauss_seidel ? LocalKind::gauss_seidel : LocalKind::jacobi) {}
+  LocalMethod(const Problem& prob, const DualSystem& ds, const XpbdSettings& s, LocalKind kind);
+  LocalMethod(const Problem& prob, const DualSystem& ds, const XpbdSettings& s, bool gauss_seidel)
+      : LocalMethod(prob, ds, s, gauss_seidel ? LocalKind::gauss_seidel : LocalKind::jacobi) {}
   // One sweep: updates x and λ. `state` holds C and ∇C at the current x (Jacobi uses it;
   // Gauss–Seidel re-evaluates each constraint at the positions of the moment).
   void sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,

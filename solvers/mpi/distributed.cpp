@@ -7,8 +7,8 @@
 #include "../kernels.hpp"
 #include "../timer.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -89,14 +89,14 @@ long long g_next_id = 1;
 
 class DistributedSolver final : public LinearSolver {
  public:
-  DistributedSolver(const std::string& name, const Params& p) : name_(name), tol_(p.linear_tol) {
+  DistributedSolver(const std::string& name, const SolverSettings& p) : name_(name), tol_(p.linear.tol) {
     id_ = g_next_id++;
     if (mpi_size() > 1) {
       Header h;
       h.cmd = kCreate;
       h.id = id_;
       bcast_header(h);
-      std::string n = name, text = serialize_params(p);
+      std::string n = name, text = serialize_settings(p);
       bcast_string(n);
       bcast_string(text);
     }
@@ -214,12 +214,12 @@ class DistributedSolver final : public LinearSolver {
 bool g_workers_stopped = false;
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, const Params& p) {
+std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, const SolverSettings& p) {
   return std::make_unique<DistributedSolver>(name, p);
 }
 
-std::unique_ptr<LinearSolver> make_hypre(const Params& p) { return make_distributed_solver("hypre", p); }
-std::unique_ptr<LinearSolver> make_muelu(const Params& p) { return make_distributed_solver("muelu", p); }
+std::unique_ptr<LinearSolver> make_hypre(const SolverSettings& p) { return make_distributed_solver("hypre", p); }
+std::unique_ptr<LinearSolver> make_muelu(const SolverSettings& p) { return make_distributed_solver("muelu", p); }
 
 int serve_workers() {
   std::map<long long, std::unique_ptr<DistributedKernel>> kernels;
@@ -236,7 +236,7 @@ int serve_workers() {
           std::string name, text;
           bcast_string(name);
           bcast_string(text);
-          kernels[id] = make_distributed_kernel(name, deserialize_params(text));
+          kernels[id] = make_distributed_kernel(name, deserialize_settings(text));
           break;
         }
         case kSetup: {

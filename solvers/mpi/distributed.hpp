@@ -74,20 +74,20 @@ class DistributedKernel {
 // asked of the one registry (solvers/registry.cpp). The kernel throws xb::Error for a method
 // without one in this build.
 bool method_is_distributed(const std::string& name);
-std::unique_ptr<DistributedKernel> make_distributed_kernel(const std::string& name, const Params& p);
+std::unique_ptr<DistributedKernel> make_distributed_kernel(const std::string& name, const SolverSettings& p);
 
 // Kernel constructors (solvers/mpi/hypre.cpp, solvers/mpi/muelu.cpp), only when built in.
-std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p);
-std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p);
+std::unique_ptr<DistributedKernel> make_hypre_kernel(const SolverSettings& p);
+std::unique_ptr<DistributedKernel> make_muelu_kernel(const SolverSettings& p);
 
-// The library options a Params maps to for a system with `block_size` unknowns per node (for
+// The library options a SolverSettings maps to for a system with `block_size` unknowns per node (for
 // tests and the README table): BoomerAMG's integer codes ("coarsen_type", "interp_type",
 // "relax_type", "num_functions", "nodal", ...) and MueLu's parameter list as text.
-std::map<std::string, double> hypre_options(const Params& p, int block_size = 1);
-std::string muelu_parameter_text(const Params& p, int block_size = 1);
+std::map<std::string, double> hypre_options(const SolverSettings& p, int block_size = 1);
+std::string muelu_parameter_text(const SolverSettings& p, int block_size = 1);
 
 // Rank 0: a LinearSolver that drives the kernel `name` on all ranks.
-std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, const Params& p);
+std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, const SolverSettings& p);
 
 // Ranks > 0: serve rank 0's commands until it sends quit. Returns the exit code.
 int serve_workers();

@@ -1,8 +1,8 @@
 // Messages between rank 0 and the worker ranks: see distributed_transport.hpp.
 #include "distributed_transport.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 
 #include <chrono>
 #include <sstream>
@@ -70,18 +70,18 @@ void bcast_string(std::string& s) {
   if (len) MPI_Bcast(s.data(), static_cast<int>(len), MPI_CHAR, 0, MPI_COMM_WORLD);
 }
 
-std::string serialize_params(const Params& p) {
+std::string serialize_settings(const SolverSettings& p) {
   std::string s;
-  for (const auto& f : param_fields()) s += f.key + "=" + param_to_string(p, f) + "\n";
+  for (const auto& f : solver_settings()) s += f.key + "=" + setting_text(f, p) + "\n";
   return s;
 }
 
-Params deserialize_params(const std::string& text) {
-  Params p;
+SolverSettings deserialize_settings(const std::string& text) {
+  SolverSettings p;
   std::istringstream is(text);
   for (std::string line; std::getline(is, line);) {
     const auto eq = line.find('=');
-    if (eq != std::string::npos) set_param(p, line.substr(0, eq), line.substr(eq + 1), "mpi");
+    if (eq != std::string::npos) set_setting(solver_settings(), p, line.substr(0, eq), line.substr(eq + 1), "mpi");
   }
   return p;
 }

@@ -1,5 +1,5 @@
 // The messages between rank 0 and the worker ranks of the distributed solvers (internal to
-// distributed.cpp): command headers, Params, row blocks with their near-kernel rows, vectors.
+// distributed.cpp): command headers, SolverSettings, row blocks with their near-kernel rows, vectors.
 #pragma once
 
 #include "distributed.hpp"
@@ -26,9 +26,9 @@ struct Header {
 void bcast_header(Header& h);
 void bcast_string(std::string& s);
 
-// Params as "key=value" lines through the one field table (so workers see exactly rank 0's).
-std::string serialize_params(const Params& p);
-Params deserialize_params(const std::string& text);
+// The solver settings as "key=value" lines through their one table (so workers see exactly rank 0's).
+std::string serialize_settings(const SolverSettings& p);
+SolverSettings deserialize_settings(const std::string& text);
 
 // Rank 0: rows [first, last) of A, and of the near-kernel basis when nk is not null, into blk.
 void extract_block(const SparseMatrix& A, const Eigen::MatrixXd* nk, long long first, long long last, int block_size,

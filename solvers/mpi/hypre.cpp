@@ -27,8 +27,8 @@
 #include "../setup_policy.hpp"
 #include "../timer.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 
 #include <HYPRE.h>
 #include <HYPRE_krylov.h>
@@ -95,15 +95,15 @@ HYPRE_Int no_setup(HYPRE_Solver, HYPRE_ParCSRMatrix, HYPRE_ParVector, HYPRE_ParV
 
 class HypreKernel final : public DistributedKernel {
  public:
-  explicit HypreKernel(const Params& p) : p_(p), policy_(p.amg_setup_interval) {
+  explicit HypreKernel(const SolverSettings& p) : p_(p), policy_(p.amg.setup_interval) {
     static std::once_flag once;
     std::call_once(once, [] { HYPRE_Init(); });
     // Validate the choices now (on every rank), not at the first setup.
-    coarsen_type(p.hypre_coarsening);
-    interp_type(p.hypre_interpolation);
-    relax_type(p.hypre_relaxation);
-    if (p.hypre_reuse != "none" && p.hypre_reuse != "hierarchy")
-      throw Error("hypre.reuse: unknown '" + p.hypre_reuse + "' (valid: none, hierarchy)");
+    coarsen_type(p.hypre.coarsening);
+    interp_type(p.hypre.interpolation);
+    relax_type(p.hypre.relaxation);
+    if (p.hypre.reuse != "none" && p.hypre.reuse != "hierarchy")
+      throw Error("hypre.reuse: unknown '" + p.hypre.reuse + "' (valid: none, hierarchy)");
   }
   ~HypreKernel() override {
     destroy_pcg();
@@ -119,7 +119,7 @@ class HypreKernel final : public DistributedKernel {
     const HYPRE_BigInt hi = static_cast<HYPRE_BigInt>(blk.first + blk.rows() - 1);
     n_local_ = blk.rows();
     destroy_pcg();  // it refers to the previous matrix
-    const bool rebuild = p_.hypre_reuse == "none" || policy_.rebuild(kind, ctx, amg_ != nullptr);
+    const bool rebuild = p_.hypre.reuse == "none" || policy_.rebuild(kind, ctx, amg_ != nullptr);
     // The matrix the hierarchy was built from stays alive while the hierarchy is in use.
     if (ij_ && ij_ != ij_amg_) destroy_matrix(ij_);
     ij_ = nullptr;
@@ -163,10 +163,10 @@ class HypreKernel final : public DistributedKernel {
     }
     // PCG is cheap to set up; a fresh one per matrix keeps its work vectors and matvec current.
     HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &pcg_);
-    HYPRE_PCGSetTol(pcg_, p_.linear_tol);
+    HYPRE_PCGSetTol(pcg_, p_.linear.tol);
     HYPRE_PCGSetAbsoluteTol(pcg_, 0.0);
     HYPRE_PCGSetTwoNorm(pcg_, 1);  // stop on ‖r‖₂/‖b‖₂, not the C-norm
-    HYPRE_PCGSetMaxIter(pcg_, p_.linear_max_iterations);
+    HYPRE_PCGSetMaxIter(pcg_, p_.linear.max_iterations);
     HYPRE_PCGSetPrintLevel(pcg_, 0);
     HYPRE_PCGSetLogging(pcg_, 1);
     logged_.amg = amg_;
@@ -216,9 +216,9 @@ class HypreKernel final : public DistributedKernel {
     if (!std::isfinite(rel)) {
       st.status = LinearStatus::breakdown;
       st.message = "hypre PCG: residual is not finite";
-    } else if (rel <= p_.linear_tol) {
+    } else if (rel <= p_.linear.tol) {
       st.status = LinearStatus::converged;
-    } else if (iters >= p_.linear_max_iterations) {
+    } else if (iters >= p_.linear.max_iterations) {
       st.status = LinearStatus::max_iterations;
     } else {
       st.status = LinearStatus::breakdown;
@@ -302,7 +302,7 @@ class HypreKernel final : public DistributedKernel {
     m = nullptr;
   }
 
-  Params p_;
+  SolverSettings p_;
   int n_local_ = 0;
   HYPRE_BigInt lo_ = -1, hi_ = -1;
   HYPRE_IJMatrix ij_ = nullptr, ij_amg_ = nullptr;  // current matrix, matrix of the hierarchy
@@ -316,20 +316,20 @@ class HypreKernel final : public DistributedKernel {
 
 }  // namespace
 
-std::map<std::string, double> hypre_options(const Params& p, int block_size) {
-  return {{"coarsen_type", coarsen_type(p.hypre_coarsening)},
-          {"interp_type", interp_type(p.hypre_interpolation)},
-          {"relax_type", relax_type(p.hypre_relaxation)},
+std::map<std::string, double> hypre_options(const SolverSettings& p, int block_size) {
+  return {{"coarsen_type", coarsen_type(p.hypre.coarsening)},
+          {"interp_type", interp_type(p.hypre.interpolation)},
+          {"relax_type", relax_type(p.hypre.relaxation)},
           {"coarsest_relax_type", 9},
-          {"strong_threshold", p.amg_strength_threshold},
-          {"agg_num_levels", p.hypre_aggressive_levels},
-          {"max_levels", p.hypre_max_levels},
+          {"strong_threshold", p.amg.strength_threshold},
+          {"agg_num_levels", p.hypre.aggressive_levels},
+          {"max_levels", p.hypre.max_levels},
           {"num_sweeps", 1},
           {"pcg_two_norm", 1},
           {"num_functions", block_size},
           {"nodal", 0}};  // see the file comment
 }
 
-std::unique_ptr<DistributedKernel> make_hypre_kernel(const Params& p) { return std::make_unique<HypreKernel>(p); }
+std::unique_ptr<DistributedKernel> make_hypre_kernel(const SolverSettings& p) { return std::make_unique<HypreKernel>(p); }
 
 }  // namespace xb

@@ -18,8 +18,8 @@
 #include "../setup_policy.hpp"
 #include "../timer.hpp"
 
-#include "../../problems/error.hpp"
-#include "../../problems/params.hpp"
+#include "../../core/error.hpp"
+#include "../solver_settings.hpp"
 
 #include <BelosCGIter.hpp>
 #include <BelosLinearProblem.hpp>
@@ -108,30 +108,30 @@ class HistoryTest final : public Belos::StatusTest<SC, MV, OP> {
 
 class MueLuKernel final : public DistributedKernel {
  public:
-  explicit MueLuKernel(const Params& p) : p_(p), policy_(p.amg_setup_interval) {
+  explicit MueLuKernel(const SolverSettings& p) : p_(p), policy_(p.amg.setup_interval) {
     ensure_tpetra();
     comm_ = rcp(new Teuchos::MpiComm<int>(MPI_COMM_WORLD));
     make_parameters(p, 1);  // rejects bad choices now, on every rank
   }
 
   // The harness keys → MueLu parameter names (see README), for `block_size` unknowns per node.
-  static Teuchos::ParameterList make_parameters(const Params& p, int block_size) {
+  static Teuchos::ParameterList make_parameters(const SolverSettings& p, int block_size) {
     Teuchos::ParameterList L;
     L.set("verbosity", "none");
     L.set("problem: symmetric", true);
     // Nodes of block_size rows: aggregation on the amalgamated (node) graph, and with the rigid
     // modes as "Nullspace" (user data, set in setup) a tentative P per aggregate from its QR.
     L.set("number of equations", block_size);
-    L.set("max levels", p.amg_max_levels);
-    L.set("coarse: max size", p.muelu_coarse_size);
+    L.set("max levels", p.amg.max_levels);
+    L.set("coarse: max size", p.muelu.coarse_size);
     L.set("coarse: type", "KLU2");
-    const std::string& a = p.muelu_algorithm;
+    const std::string& a = p.muelu.algorithm;
     if (a != "auto" && a != "sa" && a != "unsmoothed")
       throw Error("muelu.algorithm: unknown '" + a + "' (valid: auto, unsmoothed, sa)");
     L.set("multigrid algorithm", a != "auto" ? a : block_size > 1 ? "sa" : "unsmoothed");
     L.set("aggregation: type", "uncoupled");
     if (block_size == 1) {
-      L.set("aggregation: drop tol", p.amg_strength_threshold);
+      L.set("aggregation: drop tol", p.amg.strength_threshold);
     } else {
       // K (measured on cloth_hang and bar_hang): the dual's 0.25 cut cloth's couplings so that
       // CG needed 6-8x the iterations, and no dropping left bar_hang at 4x. 0.05 on the fine
@@ -140,7 +140,7 @@ class MueLuKernel final : public DistributedKernel {
       // leaves it out of every aggregate, and on the bar a whole coarse level was left out, so
       // the coarsest matrix was singular (KLU2: numeric factorization failed).
       L.set("aggregation: drop tol", kBlockDropTol);
-      for (int l = 2; l < p.amg_max_levels; ++l)  // "level l" builds level l from level l − 1
+      for (int l = 2; l < p.amg.max_levels; ++l)  // "level l" builds level l from level l − 1
         L.sublist("level " + std::to_string(l)).set("aggregation: drop tol", kBlockCoarseDropTol);
       L.set("aggregation: preserve Dirichlet points", true);
     }
@@ -153,24 +153,24 @@ class MueLuKernel final : public DistributedKernel {
       L.set("repartition: enable", true);
       L.set("repartition: partitioner", "zoltan2");
       L.set("repartition: start level", 0);
-      L.set("repartition: min rows per proc", p.muelu_coarse_size);
+      L.set("repartition: min rows per proc", p.muelu.coarse_size);
       L.set("repartition: max imbalance", 1.2);
     } else {
       L.set("repartition: enable", false);
     }
-    if (p.muelu_reuse != "none" && p.muelu_reuse != "tP" && p.muelu_reuse != "RP")
-      throw Error("muelu.reuse: unknown '" + p.muelu_reuse + "' (valid: none, tP, RP)");
-    L.set("reuse: type", p.muelu_reuse);
+    if (p.muelu.reuse != "none" && p.muelu.reuse != "tP" && p.muelu.reuse != "RP")
+      throw Error("muelu.reuse: unknown '" + p.muelu.reuse + "' (valid: none, tP, RP)");
+    L.set("reuse: type", p.muelu.reuse);
     set_smoother(L, p);
     return L;
   }
 
-  static void set_smoother(Teuchos::ParameterList& L, const Params& p) {
-    const std::string& s = p.muelu_smoother;
+  static void set_smoother(Teuchos::ParameterList& L, const SolverSettings& p) {
+    const std::string& s = p.muelu.smoother;
     if (s == "chebyshev") {
       L.set("smoother: type", "CHEBYSHEV");
       auto& sp = L.sublist("smoother: params");
-      sp.set("chebyshev: degree", p.muelu_smoother_sweeps);
+      sp.set("chebyshev: degree", p.muelu.smoother_sweeps);
       // Ifpack2's default 10 power iterations can underestimate lambda_max(D^-1 A) on these
       // systems; Chebyshev then amplifies the top of the spectrum, the V-cycle is indefinite and
       // CG breaks down (seen on a 96-row bar on 2 ranks) - the same failure mgpbd had.
@@ -179,17 +179,17 @@ class MueLuKernel final : public DistributedKernel {
       L.set("smoother: type", "RELAXATION");
       auto& sp = L.sublist("smoother: params");
       sp.set("relaxation: type", s == "jacobi" ? "Jacobi" : "Symmetric Gauss-Seidel");
-      sp.set("relaxation: sweeps", p.muelu_smoother_sweeps);
+      sp.set("relaxation: sweeps", p.muelu.smoother_sweeps);
     } else if (s == "gs") {
       // Forward sweeps before, backward after: the V-cycle stays symmetric for CG.
       L.set("smoother: pre type", "RELAXATION");
       L.set("smoother: post type", "RELAXATION");
       auto& pre = L.sublist("smoother: pre params");
       pre.set("relaxation: type", "Gauss-Seidel");
-      pre.set("relaxation: sweeps", p.muelu_smoother_sweeps);
+      pre.set("relaxation: sweeps", p.muelu.smoother_sweeps);
       auto& post = L.sublist("smoother: post params");
       post.set("relaxation: type", "Gauss-Seidel");
-      post.set("relaxation: sweeps", p.muelu_smoother_sweeps);
+      post.set("relaxation: sweeps", p.muelu.smoother_sweeps);
       post.set("relaxation: backward mode", true);
     } else {
       throw Error("muelu.smoother: unknown '" + s + "' (valid: chebyshev, jacobi, gs, sgs)");
@@ -202,7 +202,7 @@ class MueLuKernel final : public DistributedKernel {
                               blk.block_size == block_size_;
     if (same_pattern) refill_matrix(blk);
     else build_matrix(blk);
-    const bool rebuild = p_.muelu_reuse == "none" ||
+    const bool rebuild = p_.muelu.reuse == "none" ||
                          policy_.rebuild(same_pattern ? SetupKind::Values : SetupKind::Structure, ctx, !prec_.is_null());
     if (rebuild) {
       build_hierarchy(blk);
@@ -210,7 +210,7 @@ class MueLuKernel final : public DistributedKernel {
       record_setup(kind == SetupKind::Structure ? "structure" : "values", true);
     } else {
       MueLu::ReuseTpetraPreconditioner(A_, *prec_);
-      record_setup("reuse-" + p_.muelu_reuse, false);
+      record_setup("reuse-" + p_.muelu.reuse, false);
     }
     collect_statistics();
   }
@@ -237,11 +237,11 @@ class MueLuKernel final : public DistributedKernel {
     auto problem = rcp(new Belos::LinearProblem<SC, MV, OP>(A_, X, B));
     problem->setLeftPrec(prec_);
     problem->setProblem();
-    auto conv = rcp(new Belos::StatusTestGenResNorm<SC, MV, OP>(p_.linear_tol));
+    auto conv = rcp(new Belos::StatusTestGenResNorm<SC, MV, OP>(p_.linear.tol));
     conv->defineResForm(Belos::StatusTestGenResNorm<SC, MV, OP>::Implicit, Belos::TwoNorm);
     conv->defineScaleForm(Belos::NormOfRHS, Belos::TwoNorm);
     auto history = rcp(new HistoryTest(conv, bnorm, &clock, &st.residual_history, &st.residual_time));
-    auto maxit = rcp(new Belos::StatusTestMaxIters<SC, MV, OP>(p_.linear_max_iterations));
+    auto maxit = rcp(new Belos::StatusTestMaxIters<SC, MV, OP>(p_.linear.max_iterations));
     auto combo = rcp(new Belos::StatusTestCombo<SC, MV, OP>(Belos::StatusTestCombo<SC, MV, OP>::OR, history, maxit));
     auto out = rcp(new Belos::OutputManager<SC>(Belos::Errors));
     Teuchos::ParameterList cgp;
@@ -323,7 +323,7 @@ class MueLuKernel final : public DistributedKernel {
       user.set("Coordinates", coords);
       // A one-level hierarchy would leave the direct solve spread over the ranks: keep at
       // least two levels so the coarse one is moved onto a single rank.
-      if (blk.n_global <= p_.muelu_coarse_size)
+      if (blk.n_global <= p_.muelu.coarse_size)
         L.set("coarse: max size", static_cast<int>(std::max<long long>(1, blk.n_global / 4)));
     }
     try {
@@ -355,7 +355,7 @@ class MueLuKernel final : public DistributedKernel {
     record_levels(std::move(rows), std::move(nnz));
   }
 
-  Params p_;
+  SolverSettings p_;
   RCP<const Teuchos::Comm<int>> comm_;
   RCP<const Map> map_;
   RCP<CrsMatrix> A_;
@@ -367,10 +367,10 @@ class MueLuKernel final : public DistributedKernel {
 
 }  // namespace
 
-std::unique_ptr<DistributedKernel> make_muelu_kernel(const Params& p) { return std::make_unique<MueLuKernel>(p); }
+std::unique_ptr<DistributedKernel> make_muelu_kernel(const SolverSettings& p) { return std::make_unique<MueLuKernel>(p); }
 
-// The MueLu parameter list a Params gives, as text (for tests and the README).
-std::string muelu_parameter_text(const Params& p, int block_size) {
+// The MueLu parameter list a SolverSettings gives, as text (for tests and the README).
+std::string muelu_parameter_text(const SolverSettings& p, int block_size) {
   std::ostringstream os;
   MueLuKernel::make_parameters(p, block_size).print(os);
   return os.str();

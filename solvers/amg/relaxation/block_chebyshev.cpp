@@ -1,6 +1,6 @@
 #include "block_chebyshev.hpp"
 
-#include "../../../problems/error.hpp"
+#include "../../../core/error.hpp"
 
 #include <cmath>
 

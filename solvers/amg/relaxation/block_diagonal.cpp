@@ -2,7 +2,7 @@
 
 #include "lanczos.hpp"
 
-#include "../../../problems/error.hpp"
+#include "../../../core/error.hpp"
 #include "../../kernels.hpp"
 #include "smoothers.hpp"
 

@@ -2,7 +2,7 @@
 // smoothers' and the smoothed prolongator's spectral bound.
 #pragma once
 
-#include "../../../problems/sparse.hpp"
+#include "../../../core/sparse.hpp"
 
 #include <functional>
 

@@ -12,7 +12,7 @@
 // values-only refresh warm-starts it from the previous dominant vector.
 #pragma once
 
-#include "../../../problems/sparse.hpp"
+#include "../../../core/sparse.hpp"
 #include "../../coloring.hpp"
 #include "../nodal.hpp"
 

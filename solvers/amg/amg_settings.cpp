@@ -1,0 +1,26 @@
+#include "amg_settings.hpp"
+
+namespace xb {
+
+const SettingTable<AmgSettings>& amg_settings() {
+  using S = AmgSettings;
+  static const SettingTable<S> table = {
+      setting("amg.strength_threshold", "theta_s: keep |Aij| >= theta sqrt(|Aii Ajj|)", &S::strength_threshold, 0, 1),
+      setting("amg.aggregation", "aggregation rule", &S::aggregation, {"standard"}),
+      setting("amg.near_kernel", "near-kernel candidates: auto (ones dual, rigid primal) | ones | gs | rigid (6 rigid-body modes, primal form only)", &S::near_kernel, {"auto", "ones", "gs", "rigid"}),
+      setting("amg.near_kernel_sweeps", "Gauss-Seidel sweeps on Ax=0 for near_kernel=gs", &S::near_kernel_sweeps, 0, 1e6),
+      setting("amg.near_kernel_vectors", "number of gs candidate vectors", &S::near_kernel_vectors, 1, 64),
+      setting("amg.prolongator", "auto (tentative dual, smoothed primal) | tentative | smoothed: P = (I - omega D^-1 A) T, omega = 4/(3 lambda_max(D^-1 A))", &S::prolongator, {"auto", "tentative", "smoothed"}),
+      setting("amg.nodal_strength_threshold", "theta of nodal coarsening on level 0 (block systems: primal form), on block Frobenius norms", &S::nodal_strength_threshold, 0, 1),
+      setting("amg.coarse_nodal_strength_threshold", "theta of nodal coarsening on levels >= 1 (< 0: amg.nodal_strength_threshold)", &S::coarse_nodal_strength_threshold, -1, 1),
+      setting("amg.prolongator_diagonal", "D of the smoothed prolongator: scalar (A's diagonal) | block (node blocks)", &S::prolongator_diagonal, {"scalar", "block"}),
+      setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &S::smoother, {"auto", "jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"}),
+      setting("amg.smoother_sweeps", "pre- and post-smoothing sweeps (0 = auto: 1 dual, 2 primal)", &S::smoother_sweeps, 0, 100),
+      setting("amg.setup_interval", "frames between rebuilds of aggregates and P", &S::setup_interval, 1, 1e9),
+      setting("amg.max_coarse", "stop coarsening at this many rows", &S::max_coarse, 1, 1e9),
+      setting("amg.max_levels", "maximum number of levels", &S::max_levels, 1, 64),
+  };
+  return table;
+}
+
+}  // namespace xb

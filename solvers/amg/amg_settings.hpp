@@ -1,0 +1,30 @@
+// The in-house AMG's settings (mgpbd): the amg.* keys. amg.setup_interval also paces the lazy
+// setup of hypre and MueLu (solvers/setup_policy.hpp).
+#pragma once
+
+#include "../../core/settings.hpp"
+
+#include <string>
+
+namespace xb {
+
+struct AmgSettings {
+  double strength_threshold = 0.25;
+  std::string aggregation = "standard";
+  std::string near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | rigid
+  int near_kernel_sweeps = 20;
+  int near_kernel_vectors = 1;
+  std::string prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
+  double nodal_strength_threshold = 0.0;         // block systems (primal K), level 0
+  double coarse_nodal_strength_threshold = 0.1;  // levels >= 1 (< 0: the level-0 value)
+  std::string prolongator_diagonal = "scalar";   // D of the smoothed P: scalar | block
+  std::string smoother = "auto";  // auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
+  int smoother_sweeps = 0;        // 0: auto (1 dual, 2 primal)
+  int setup_interval = 20;        // frames between rebuilds of aggregates and P
+  int max_coarse = 400;
+  int max_levels = 10;
+};
+
+const SettingTable<AmgSettings>& amg_settings();
+
+}  // namespace xb
