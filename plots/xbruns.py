@@ -5,6 +5,7 @@ final_dual_residual, relative_dual_residual, wall_time, rows, every parameter by
 sweeps sweep_params/sweep_point/sweep_key) and per-entry datasets (frame, substep, iteration,
 dual_residual, relative_dual_residual, wall_time, energy, position_error with a reference, ...).
 """
+import json
 import math
 import os
 import sys
@@ -25,9 +26,28 @@ def _text(v):
     return v
 
 
+SCHEMA_PATH = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "results", "schema.json")
+
+
+def schema():
+    """results/schema.json: the names, levels and types of every attribute and dataset a run may
+    hold (the list the recorder writes by, harness/io/schema.cpp)."""
+    with open(SCHEMA_PATH) as fh:
+        return json.load(fh)
+
+
+def dataset_names(level="simulation"):
+    return {d["name"] for d in schema()["datasets"] if d["level"] in ("any", level)}
+
+
 def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "relative_dual_residual", "wall_time"),
          level="simulation"):
-    """A list of runs: dict(name, attrs, data) with the requested datasets that exist."""
+    """A list of runs: dict(name, attrs, data) with the requested datasets that exist. A dataset
+    the schema does not list for the level is a programming error in the plot, not missing data."""
+    known = dataset_names(level) if level else {d["name"] for d in schema()["datasets"]}
+    unknown = [d for d in datasets if d not in known]
+    if unknown:
+        raise ValueError(f"xbruns.load: {', '.join(unknown)} not in results/schema.json for {level or 'any'} runs")
     if not os.path.exists(path):
         sys.exit(f"{path}: no such file")
     runs = []

@@ -5,6 +5,7 @@
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 #include "../io/mesh_writer.hpp"
+#include "../io/schema.hpp"
 #include "../io/state_io.hpp"
 
 #include "../../core/error.hpp"
@@ -30,6 +31,12 @@ int cmd_list(const CommandArgs& argv) {
   std::cout << "parameters (key = default: doc):\n";
   const Params defaults;
   for (const auto& f : param_fields()) std::cout << "  " << f.key << " = " << param_to_string(defaults, f) << ": " << f.doc << "\n";
+  return 0;
+}
+
+int cmd_schema(const CommandArgs& argv) {
+  Args args("schema", argv, {});
+  std::cout << schema_json();
   return 0;
 }
 

@@ -7,6 +7,7 @@
 namespace xb {
 using CommandArgs = std::vector<std::string>;
 int cmd_list(const CommandArgs& args);
+int cmd_schema(const CommandArgs& args);
 int cmd_run(const CommandArgs& args);
 int cmd_report(const CommandArgs& args);
 int cmd_sweep(const CommandArgs& args);

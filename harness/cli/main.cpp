@@ -21,7 +21,8 @@ struct Command {
   const char* usage;
 };
 const Command commands[] = {
-    {"list", xb::cmd_list, "list                                  scenes and solvers, one per line"},
+    {"list", xb::cmd_list, "list                                  scenes, solvers and parameter keys, one per line"},
+    {"schema", xb::cmd_schema, "schema                                the results schema as JSON (results/schema.json)"},
     {"run", xb::cmd_run,
      "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--reference] [--save-state FILE --frame-of-state F] [--load-state FILE] --out FILE.h5"},
     {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},

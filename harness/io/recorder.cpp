@@ -1,4 +1,5 @@
 #include "recorder.hpp"
+#include "schema.hpp"
 
 #include "h5io.hpp"
 
@@ -58,6 +59,7 @@ const Silence silence_hdf5;
 }  // namespace
 
 void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh) {
+  for (const auto& r : runs) check_against_schema(r);
   const std::string tmp = path + ".tmp";
   std::error_code ec;
   fs::remove(tmp, ec);
