@@ -111,11 +111,8 @@ void set_param(Params& p, const std::string& key, const std::string& value, cons
     if (key == "variant") apply_variant_keys(p);  // a variant sets the keys it implies, where it is set
     return;
   }
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(value.c_str(), &end);
-  if (value.empty() || end != value.c_str() + value.size() || errno == ERANGE || !std::isfinite(v))
-    throw bad("not a finite number");
+  double v = 0;
+  if (const std::string why = parse_finite(value, v); !why.empty()) throw bad(why);
   if (v < f->min || v > f->max) {
     std::ostringstream os;
     os << "out of range [" << f->min << ", " << f->max << "]";
@@ -127,6 +124,20 @@ void set_param(Params& p, const std::string& key, const std::string& value, cons
   } else {
     p.*std::get<double Params::*>(f->member) = v;
   }
+}
+
+std::string parse_finite(const std::string& text, double& v) {
+  errno = 0;
+  char* end = nullptr;
+  const double d = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || std::isspace(static_cast<unsigned char>(text[0])))
+    return "not a number";
+  if (std::isnan(d) || (std::isinf(d) && errno != ERANGE)) return "not finite";
+  if (errno == ERANGE && std::abs(d) > 1)
+    return "out of range (too large for a double, above 1.8e308)";
+  if (errno == ERANGE) return "out of range (too small for a double, below 2.2e-308; use 0 or a larger value)";
+  v = d;
+  return "";
 }
 
 std::string param_to_string(const Params& p, const ParamField& f) {

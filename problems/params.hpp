@@ -101,6 +101,10 @@ const ParamField* find_param(const std::string& key);
 // ("--set", "scene.toml:12") for the error message. Throws xb::Error.
 void set_param(Params& p, const std::string& key, const std::string& value, const std::string& where);
 
+// Text → a finite double. Returns "" when `v` was set, else what is wrong, in the words the
+// errors use: "not a number", "not finite" (inf, nan), "out of range (...)" (over- or underflow).
+std::string parse_finite(const std::string& text, double& v);
+
 // A key's value as text (for tables, JSON) and as a typed value (for HDF5).
 std::string param_to_string(const Params& p, const ParamField& f);
 using ParamValue = std::variant<long long, double, std::string>;
