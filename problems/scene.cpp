@@ -57,7 +57,9 @@ void flatten(const toml::table& t, const std::string& prefix, const std::string&
 }  // namespace
 
 std::vector<TomlEntry> read_toml_flat(const std::string& path) {
-  if (!fs::is_regular_file(path)) throw Error(path + ": no such file");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not a TOML file");
+  if (!fs::is_regular_file(path, ec)) throw Error(path + ": no such file");
   toml::table t;
   try {
     t = toml::parse_file(path);
@@ -73,7 +75,12 @@ std::vector<TomlEntry> read_toml_flat(const std::string& path) {
 }
 
 void load_scene_file(const std::string& path, Params& p) {
-  for (const auto& e : read_toml_flat(path)) {
+  const auto entries = read_toml_flat(path);
+  // Without `scene` the default builder would run silently, whatever the file meant.
+  if (std::none_of(entries.begin(), entries.end(), [](const TomlEntry& e) { return e.key == "scene"; }))
+    throw Error(path + ": " + (entries.empty() ? "empty scene file" : "no 'scene' key") +
+                " (a scene file names its builder: scene = \"cloth_hang\", ...)");
+  for (const auto& e : entries) {
     const std::string where = path + ":" + std::to_string(e.line);
     if (e.is_array) throw Error(where + ": '" + e.key + "' must be a single value, not a list");
     set_param(p, e.key, e.value, where);
@@ -328,15 +335,26 @@ const std::vector<BuilderInfo>& scene_builders() {
   return b;
 }
 
-Problem build_problem(const Params& p) {
-  validate(p);
-  // Scene keys that only some builders read are refused elsewhere rather than silently ignored.
+void check_scene_keys(const Params& p) {
+  // Scene keys that only some builders read are refused rather than silently ignored.
   const bool mesh_scene = p.scene == "squash" || p.scene == "twist_bar" || p.scene == "cantilever" || p.scene == "ball_drop";
   if (p.mesh_height != 0 && !mesh_scene)
     throw Error("parameter 'mesh_height' applies to the mesh scenes (squash, twist_bar, cantilever, ball_drop), not '" +
                 p.scene + "'");
   if (p.init != "none" && p.scene != "squash")
     throw Error("parameter 'init' = '" + p.init + "' applies to the squash scene only, not '" + p.scene + "'");
+  if (!p.mesh.empty() && !mesh_scene)
+    throw Error("parameter 'mesh' = '" + p.mesh + "' applies to the mesh scenes (squash, twist_bar, cantilever, ball_drop), not '" +
+                p.scene + "' (it builds its own mesh; use resolution)");
+  if (p.twist != 0 && p.scene != "twist_bar")
+    throw Error("parameter 'twist' applies to the twist_bar scene only, not '" + p.scene + "'");
+  if (p.prestretch != 1 && p.scene != "bar_hang")
+    throw Error("parameter 'prestretch' applies to the bar_hang scene only, not '" + p.scene + "'");
+}
+
+Problem build_problem(const Params& p) {
+  validate(p);
+  check_scene_keys(p);
   for (const auto& b : scene_builders())
     if (b.name == p.scene) {
       Problem prob = b.build(p);
