@@ -11,7 +11,6 @@
 #include "problems/params.hpp"
 #include "problems/scene.hpp"
 #include "solvers/mpi/distributed.hpp"
-#include "solvers/mpi/distributed_transport.hpp"
 #include "solvers/kernels.hpp"
 #include "solvers/linear_solver.hpp"
 
@@ -384,31 +383,3 @@ TEST(ExternalSolverMpi, NanSystemRecordsErrorOnEveryRankCount) {
   EXPECT_FALSE(fs::exists(prefix + "_np1.h5.tmp"));
 }
 
-// Not a test of its own: run under mpirun by WorkerErrorReachesRankZero. Every rank passes its
-// error to agree_on_errors (rank 1 fails, rank 0 does not; then neither); rank 0 writes what it got.
-TEST(ExternalSolverMpi, DISABLED_AgreeChild) {
-  const char* out = std::getenv("XB_AGREE_OUT");
-  if (!out) GTEST_SKIP() << "XB_AGREE_OUT is not set";
-  const std::string first = agree_on_errors(mpi_rank() == 1 ? "kernel setup failed on this block" : "");
-  const std::string second = agree_on_errors("");
-  if (mpi_rank() == 0) std::ofstream(out) << first << "\n" << (second.empty() ? "none" : second) << "\n";
-}
-
-// What a worker rank throws reaches rank 0 with its rank, and a clean round reports nothing.
-TEST(ExternalSolverMpi, WorkerErrorReachesRankZero) {
-  const fs::path out = scratch() / "agree.txt";
-  fs::remove(out);
-  const std::string exe = fs::read_symlink("/proc/self/exe").string();
-  std::string err;
-  ASSERT_EQ(sh("XB_AGREE_OUT=" + out.string() + " " + mpirun + "-x XB_AGREE_OUT " + exe +
-                   " --gtest_also_run_disabled_tests --gtest_filter=ExternalSolverMpi.DISABLED_AgreeChild",
-               &err),
-            0)
-      << err;
-  std::ifstream f(out);
-  std::string first, second;
-  std::getline(f, first);
-  std::getline(f, second);
-  EXPECT_EQ(first, "rank 1: kernel setup failed on this block");
-  EXPECT_EQ(second, "none");
-}
