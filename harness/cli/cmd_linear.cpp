@@ -74,6 +74,9 @@ double a_norm(const SparseMatrix& A, const Vector& v) {
 
 // Every file capture may write: none an input, none a results file (capture never replaces one).
 void check_capture_outputs(const std::string& prefix, const std::string& scene, const Params& p) {
+  std::error_code ec;
+  if (fs::path(prefix).filename().empty() || fs::is_directory(prefix, ec))  // "dir/" would write dir/.h5, dir/_A.mtx
+    throw Error("capture: --out " + prefix + " is a directory; give a file prefix (PREFIX.h5, PREFIX_A.mtx, ...)");
   std::vector<std::string> inputs = mesh_inputs(p);
   inputs.push_back(resolve_scene(scene));
   for (const char* suffix : {".h5", "_A.mtx", "_b.mtx", "_K.mtx", "_f.mtx"}) {
