@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -18,6 +19,21 @@ std::string join(const std::vector<std::string>& v) {
 }
 }  // namespace
 
+std::string parse_finite(const std::string& text, double& v) {
+  errno = 0;
+  char* end = nullptr;
+  const double d = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || std::isspace(static_cast<unsigned char>(text[0])))
+    return "not a number";
+  // strtod says ERANGE for overflow (±HUGE_VAL) and underflow (a subnormal or 0): numbers a
+  // double cannot hold, not malformed text; "inf" and "nan" written out are not finite.
+  if (std::isnan(d) || (std::isinf(d) && errno != ERANGE)) return "not finite";
+  if (errno == ERANGE && std::abs(d) > 1) return "out of range (too large for a double, above 1.8e308)";
+  if (errno == ERANGE) return "out of range (too small for a double, below 2.2e-308; use 0 or a larger value)";
+  v = d;
+  return "";
+}
+
 void throw_unknown_key(const std::vector<std::string>& valid, const std::string& key, const std::string& where) {
   throw Error(where + ": unknown parameter '" + key + "' (valid: " + join(valid) + ")");
 }
@@ -31,14 +47,9 @@ void set_setting_text(SettingRef ref, SettingType type, const std::string& key, 
     *std::get<std::string*>(ref) = value;
     return;
   }
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(value.c_str(), &end);
-  if (value.empty() || end != value.c_str() + value.size()) throw bad("not a number");
-  // strtod says ERANGE for both overflow (±HUGE_VAL) and underflow (a subnormal or 0): both are
-  // numbers outside what the key accepts, not malformed text; "inf" and "nan" are written out.
-  if (errno != ERANGE && !std::isfinite(v)) throw bad("not finite");
-  if (errno == ERANGE || v < min || v > max) {
+  double v = 0;
+  if (const std::string why = parse_finite(value, v); !why.empty()) throw bad(why);
+  if (v < min || v > max) {
     std::ostringstream os;
     os << "out of range [" << min << ", " << max << "]";
     throw bad(os.str());

@@ -56,6 +56,10 @@ void append_part(SettingTable<Outer>& out, const SettingTable<Inner>& in, Part p
     out.push_back({f.key, f.type, f.doc, [r = f.ref, part](Outer& o) { return r(part(o)); }, f.min, f.max, f.choices});
 }
 
+// Text → a finite double. Returns "" when `v` was set, else what is wrong, in the words every
+// error uses: "not a number", "not finite" (inf, nan), "out of range (...)" (over- or underflow).
+std::string parse_finite(const std::string& text, double& v);
+
 // Parses `value` into *ref, checking the type, bounds and choices of the row described by the
 // other arguments; errors read "<where>: parameter '<key>' = '<value>': <what is wrong>".
 void set_setting_text(SettingRef ref, SettingType type, const std::string& key, double min, double max,

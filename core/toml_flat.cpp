@@ -45,7 +45,9 @@ void flatten(const toml::table& t, const std::string& prefix, const std::string&
 }  // namespace
 
 std::vector<TomlEntry> read_toml_flat(const std::string& path) {
-  if (!fs::is_regular_file(path)) throw Error(path + ": no such file");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not a TOML file");
+  if (!fs::is_regular_file(path, ec)) throw Error(path + ": no such file");
   toml::table t;
   try {
     t = toml::parse_file(path);

@@ -3,6 +3,8 @@
 #include "../core/error.hpp"
 #include "../core/toml_flat.hpp"
 
+#include <algorithm>
+
 namespace xb {
 
 namespace {
@@ -28,7 +30,12 @@ void set_param(Params& p, const std::string& key, const std::string& value, cons
 }
 
 void load_scene_file(const std::string& path, Params& p) {
-  for (const auto& e : read_toml_flat(path)) {
+  const auto entries = read_toml_flat(path);
+  // Without `scene` the default builder would run silently, whatever the file meant.
+  if (std::none_of(entries.begin(), entries.end(), [](const TomlEntry& e) { return e.key == "scene"; }))
+    throw Error(path + ": " + (entries.empty() ? "empty scene file" : "no 'scene' key") +
+                " (a scene file names its builder: scene = \"cloth_hang\", ...)");
+  for (const auto& e : entries) {
     const std::string where = path + ":" + std::to_string(e.line);
     if (e.is_array) throw Error(where + ": '" + e.key + "' must be a single value, not a list");
     set_param(p, e.key, e.value, where);

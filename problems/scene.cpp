@@ -270,15 +270,26 @@ const std::vector<BuilderInfo>& scene_builders() {
   return b;
 }
 
-Problem build_problem(const SceneSettings& p) {
-  validate(p);
-  // Scene keys that only some builders read are refused elsewhere rather than silently ignored.
+void check_scene_keys(const SceneSettings& p) {
+  // Scene keys that only some builders read are refused rather than silently ignored.
   const bool mesh_scene = p.scene == "squash" || p.scene == "twist_bar" || p.scene == "cantilever" || p.scene == "ball_drop";
   if (p.mesh_height != 0 && !mesh_scene)
     throw Error("parameter 'mesh_height' applies to the mesh scenes (squash, twist_bar, cantilever, ball_drop), not '" +
                 p.scene + "'");
   if (p.init != "none" && p.scene != "squash")
     throw Error("parameter 'init' = '" + p.init + "' applies to the squash scene only, not '" + p.scene + "'");
+  if (!p.mesh.empty() && !mesh_scene)
+    throw Error("parameter 'mesh' = '" + p.mesh + "' applies to the mesh scenes (squash, twist_bar, cantilever, ball_drop), not '" +
+                p.scene + "' (it builds its own mesh; use resolution)");
+  if (p.twist != 0 && p.scene != "twist_bar")
+    throw Error("parameter 'twist' applies to the twist_bar scene only, not '" + p.scene + "'");
+  if (p.prestretch != 1 && p.scene != "bar_hang")
+    throw Error("parameter 'prestretch' applies to the bar_hang scene only, not '" + p.scene + "'");
+}
+
+Problem build_problem(const SceneSettings& p) {
+  validate(p);
+  check_scene_keys(p);
   for (const auto& b : scene_builders())
     if (b.name == p.scene) {
       Problem prob = b.build(p);

@@ -28,6 +28,8 @@ struct BuilderInfo {
   SceneBuilder build;
 };
 const std::vector<BuilderInfo>& scene_builders();
+// Refuses, by name, a key set to a value the scene's builder would ignore (mesh on cloth_hang, ...).
+void check_scene_keys(const SceneSettings& p);
 // Builds p.scene's Problem; throws xb::Error for an unknown builder or a broken problem.
 Problem build_problem(const SceneSettings& p);
 

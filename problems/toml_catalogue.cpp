@@ -30,7 +30,9 @@ std::vector<std::string> TomlCatalogue::names() const {
 
 std::string TomlCatalogue::resolve(const std::string& name_or_file) const {
   if (name_or_file.find('/') != std::string::npos || name_or_file.ends_with(".toml")) {
-    if (!fs::is_regular_file(name_or_file)) throw Error(what + " file '" + name_or_file + "' does not exist");
+    std::error_code ec;
+    if (fs::is_directory(name_or_file, ec)) throw Error(what + " file '" + name_or_file + "' is a directory");
+    if (!fs::is_regular_file(name_or_file, ec)) throw Error(what + " file '" + name_or_file + "' does not exist");
     return name_or_file;
   }
   const auto known = names();

@@ -1,9 +1,11 @@
 #include "args.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/settings.hpp"
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 namespace xb {
@@ -34,6 +36,8 @@ Args::Args(const std::string& command, const std::vector<std::string>& argv, con
       for (const auto& s : spec) valid += (valid.empty() ? "" : ", ") + s.name;
       throw Error(command + ": unknown option '" + flag + "' (valid: " + valid + ")");
     }
+    if (!fs->takes_value && inline_value)  // "--reference=no" must not mean yes
+      throw Error(command + ": option " + flag + " takes no value (give " + flag + " alone, or leave it out)");
     if (fs->takes_value && !inline_value) {
       if (i + 1 >= argv.size()) throw Error(command + ": option " + flag + " needs a value");
       value = argv[++i];
@@ -63,15 +67,18 @@ const std::vector<std::string>& Args::all(const std::string& flag) const {
 double Args::get_double(const std::string& flag, double fallback) const {
   if (!has(flag)) return fallback;
   const std::string v = get(flag);
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end || !std::isfinite(d)) throw Error(command_ + ": option " + flag + " = '" + v + "' is not a number");
+  double d = 0;
+  if (const std::string why = parse_finite(v, d); !why.empty())
+    throw Error(command_ + ": option " + flag + " = '" + v + "': " + why);
   return d;
 }
 
 int Args::get_int(const std::string& flag, int fallback) const {
   const double d = get_double(flag, fallback);
-  if (d != std::floor(d) || std::abs(d) > 2e9) throw Error(command_ + ": option " + flag + " must be an integer");
+  if (d != std::floor(d)) throw Error(command_ + ": option " + flag + " = '" + get(flag) + "' must be an integer");
+  if (std::abs(d) > std::numeric_limits<int>::max())
+    throw Error(command_ + ": option " + flag + " = '" + get(flag) + "' is out of range (|value| <= " +
+                std::to_string(std::numeric_limits<int>::max()) + ")");
   return static_cast<int>(d);
 }
 

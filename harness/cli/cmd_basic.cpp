@@ -2,6 +2,8 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "report.hpp"
+#include "outputs.hpp"
+#include "profile.hpp"
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 #include "../io/mesh_writer.hpp"
@@ -57,18 +59,30 @@ int cmd_run(const CommandArgs& argv) {
   if (args.has("--frame-of-state") != !save_state.empty())
     throw Error("run: --save-state FILE and --frame-of-state F go together");
   if (!save_state.empty()) {
-    state_frame = static_cast<int>(args.get_double("--frame-of-state", 0));
-    if (state_frame < 0) throw Error("run: --frame-of-state must be >= 0");
+    state_frame = args.get_int("--frame-of-state", 0);
+    if (state_frame < 0 || state_frame >= max_frames)
+      throw Error("run: --frame-of-state " + std::to_string(state_frame) + " is out of range [0, " + std::to_string(max_frames - 1) + "]");
   }
   Params p = resolve_params(scene, sets, args.get("--profile", ""));  // scene < profile < --set
   if (state_frame >= p.frames) p.frames = state_frame + 1;  // the run must reach frame F
   const auto runs = method_runs(parse_methods(args.require("--solver")), args.get("--form", ""));
   if (!save_state.empty() && runs.size() != 1) throw Error("run: --save-state needs exactly one solver (one trajectory)");
+  // Inputs are never outputs; output folders are made (or refused) now, not after the runs.
+  std::vector<std::string> inputs = mesh_inputs(p);
+  inputs.push_back(resolve_scene(scene));
+  if (args.has("--profile")) inputs.push_back(resolve_profile(args.get("--profile")));
+  if (args.has("--load-state")) inputs.push_back(args.get("--load-state"));
+  check_output("run", "--out", out, inputs);
+  check_replaceable("run", out);
+  if (!save_state.empty()) {
+    inputs.push_back(out);  // the state must not land on the results either
+    check_output("run", "--save-state", save_state, inputs);
+  }
+  if (args.has("--write-meshes")) check_output_dir("run", "--write-meshes", args.get("--write-meshes"), inputs);
   std::optional<SimState> loaded;
   if (args.has("--load-state")) loaded = read_state(args.get("--load-state"));
   RunOptions opt;
-  opt.time_budget = args.get_double("--time-budget", 0);
-  if (opt.time_budget < 0) throw Error("run: --time-budget must be >= 0");
+  opt.time_budget = time_budget_flag(args, "run");
   opt.reference = args.has("--reference");  // per-substep reference and position_error
   const Problem prob = build_problem(p);
   if (loaded && loaded->x.cols() != prob.particles.size())
@@ -106,8 +120,8 @@ int cmd_report(const CommandArgs& argv) {
   if (args.positional().empty()) throw Error("report: which results file? (report FILE.h5 [--format table|json])");
   const std::string format = args.get("--format", "table");
   if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
-  print_report(args.positional()[0], format);
-  return 0;
+  // Unreadable runs are named on stderr and skipped; the exit code says some were.
+  return print_report(args.positional()[0], format) > 0 ? 1 : 0;
 }
 
 }  // namespace xb

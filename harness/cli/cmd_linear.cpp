@@ -6,6 +6,7 @@
 #include "../sim/capture.hpp"
 #include "../sim/primal_solve.hpp"
 #include "report.hpp"
+#include "outputs.hpp"
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 #include "../io/system_io.hpp"
@@ -71,18 +72,33 @@ double a_norm(const SparseMatrix& A, const Vector& v) {
   return q >= 0 ? std::sqrt(q) : nan_value;
 }
 
+// Every file capture may write: none an input, none a results file (capture never replaces one).
+void check_capture_outputs(const std::string& prefix, const std::string& scene, const Params& p) {
+  std::error_code ec;
+  if (fs::path(prefix).filename().empty() || fs::is_directory(prefix, ec))  // "dir/" would write dir/.h5, dir/_A.mtx
+    throw Error("capture: --out " + prefix + " is a directory; give a file prefix (PREFIX.h5, PREFIX_A.mtx, ...)");
+  std::vector<std::string> inputs = mesh_inputs(p);
+  inputs.push_back(resolve_scene(scene));
+  for (const char* suffix : {".h5", "_A.mtx", "_b.mtx", "_K.mtx", "_f.mtx"}) {
+    const std::string f = prefix + suffix;
+    check_output("capture", "--out", f, inputs);
+    if (is_results_file(f)) throw Error("capture: --out " + prefix + " would replace " + f + ", a results file (it holds /runs)");
+  }
+}
+
 }  // namespace
 
 int cmd_capture(const CommandArgs& argv) {
   Args args("capture", argv,
-            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}});
+            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}, {"--time-budget"}});
   // Everything is checked before anything runs or is written.
   const std::string scene = args.require("--scene");
   const std::string prefix = strip_h5(args.require("--out"));
   const int frame = require_int(args, "capture", "--frame");
   const int iteration = require_int(args, "capture", "--iteration");
   const int substep = args.get_int("--substep", 0);
-  if (frame < 0) throw Error("capture: --frame must be >= 0");
+  if (frame < 0 || frame >= max_frames)
+    throw Error("capture: --frame " + std::to_string(frame) + " is out of range [0, " + std::to_string(max_frames - 1) + "]");
   if (iteration < 0) throw Error("capture: --iteration must be >= 0");
   const auto solvers = parse_methods(args.get("--solver", "cholmod"), true);
   if (solvers.size() != 1) throw Error("capture: --solver takes one linear solver (it drives the simulation)");
@@ -93,11 +109,13 @@ int cmd_capture(const CommandArgs& argv) {
   if (iteration >= p.max_iterations)
     throw Error("capture: --iteration " + std::to_string(iteration) + " is never assembled: the stepper stops at max_iterations = " +
                 std::to_string(p.max_iterations) + " (raise it with --set max_iterations=N)");
+  check_capture_outputs(prefix, scene, p);
+  const double budget = time_budget_flag(args, "capture");
   std::cerr << "capture: " << p.scene << " with " << solver << " to frame " << frame << ", substep " << substep
             << ", iteration " << iteration << " ..." << std::flush;
   CapturedSystem sys;
   try {
-    sys = capture_system(p, solver, frame, substep, iteration);
+    sys = capture_system(p, solver, frame, substep, iteration, budget);
   } catch (const Error&) {
     std::cerr << "\n";
     throw;
@@ -249,9 +267,8 @@ int cmd_solve(const CommandArgs& argv) {
   const std::string system_path = args.require("--system");
   const std::string out = args.require("--out");
   const auto runs = method_runs(parse_methods(args.require("--solver"), true), args.get("--form", ""));
-  std::error_code ec;
-  if (fs::exists(out) && fs::equivalent(out, system_path, ec))
-    throw Error("solve: --out " + out + " is the system file itself (it would be replaced by the results)");
+  check_output("solve", "--out", out, {system_path});
+  check_replaceable("solve", out);
   const CapturedSystem sys = read_system_h5(system_path);
   Params p = params_from_system(sys, system_path);
   for (const auto& s : args.all("--set")) apply_set(p, s);

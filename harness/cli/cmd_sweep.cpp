@@ -5,6 +5,7 @@
 #include "args.hpp"
 #include "commands.hpp"
 #include "report.hpp"
+#include "outputs.hpp"
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 #include "sweep.hpp"
@@ -70,12 +71,17 @@ void print_table(const std::vector<std::vector<std::string>>& rows) {
 
 // The runs of this sweep already in `out` (sweep_key → run name) and how many runs it holds.
 // Throws if the file holds another sweep's runs.
-std::map<std::string, std::string> finished_runs(const std::string& out, const std::string& base, int& existing) {
+// Runs that cannot be read are named on stderr and counted in `skipped` (their jobs run again).
+std::map<std::string, std::string> finished_runs(const std::string& out, const std::string& base, int& existing,
+                                                 int& skipped) {
   std::map<std::string, std::string> finished;
-  existing = 0;
+  existing = skipped = 0;
   if (!std::filesystem::exists(out)) return finished;
-  const auto runs = read_runs(out, false);
-  existing = static_cast<int>(runs.size());
+  std::vector<std::string> bad;
+  const auto runs = read_runs(out, false, &bad);
+  warn_skipped("sweep", bad);
+  skipped = static_cast<int>(bad.size());
+  existing = static_cast<int>(runs.size() + bad.size());  // new run names follow every run in the file
   for (const auto& r : runs) {
     const std::string b = attr_cell(r, "sweep_base");
     if (b == "-") continue;
@@ -144,8 +150,9 @@ class JobRunner {
 // The summary: every run of this sweep, in sweep order, whether run now or before.
 void print_summary(const SweepSpec& spec, const std::vector<SweepJob>& jobs, const std::string& out) {
   std::map<std::string, RunRecord> by_key;
+  std::vector<std::string> bad;  // named once already, by finished_runs
   if (std::filesystem::exists(out))
-    for (auto& r : read_runs(out, false)) by_key[attr_cell(r, "sweep_key")] = std::move(r);
+    for (auto& r : read_runs(out, false, &bad)) by_key[attr_cell(r, "sweep_key")] = std::move(r);
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> header{"run"};
   for (const auto& [k, v] : spec.grid) header.push_back(k);
@@ -178,16 +185,22 @@ int cmd_sweep(const CommandArgs& argv) {
   const std::string out = args.require("--out");
   // The whole spec and every combination are checked before anything runs.
   SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"));
-  if (args.has("--time-budget")) {
-    spec.time_budget = args.get_double("--time-budget", 0);
-    if (spec.time_budget < 0) throw Error("sweep: --time-budget must be >= 0");
-  }
+  if (args.has("--time-budget")) spec.time_budget = time_budget_flag(args, "sweep");
   const std::vector<SweepJob> jobs = expand_sweep(spec);
   const std::string base = sweep_base_hash(spec);
   std::string swept;
   for (const auto& [k, v] : spec.grid) swept += (swept.empty() ? "" : ",") + k;
-  int existing = 0;
-  auto finished = finished_runs(out, base, existing);  // resume: what is already in the file
+  // Inputs are never outputs: the spec, the scene and every mesh of the grid; a file that exists
+  // must be a results file (a sweep appends to it).
+  std::vector<std::string> inputs = {args.positional()[0], spec.scene};
+  for (const auto& j : jobs)
+    for (const auto& m : mesh_inputs(j.params))
+      if (std::find(inputs.begin(), inputs.end(), m) == inputs.end()) inputs.push_back(m);
+  check_output("sweep", "--out", out, inputs);
+  if (std::filesystem::exists(out) && !is_results_file(out))
+    throw Error("sweep: --out " + out + " exists and is not an xpbd-bench results file; a sweep only appends to one");
+  int existing = 0, skipped = 0;
+  auto finished = finished_runs(out, base, existing, skipped);  // resume: what is already in the file
   int todo = 0;
   for (const auto& j : jobs) todo += finished.count(j.key) ? 0 : 1;
 
@@ -224,7 +237,8 @@ int cmd_sweep(const CommandArgs& argv) {
     std::cerr << "\n";
   }
   print_summary(spec, jobs, out);
-  return 0;
+  if (skipped) std::cerr << "sweep: " << out << " holds " << skipped << " unreadable run(s), named above; exit code 1\n";
+  return skipped ? 1 : 0;
 }
 
 }  // namespace xb

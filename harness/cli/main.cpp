@@ -28,7 +28,7 @@ const Command commands[] = {
     {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
     {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--time-budget S]   (resumes: skips runs already in FILE)"},
     {"capture", xb::cmd_capture,
-     "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] --out PREFIX"},
+     "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] [--time-budget S] --out PREFIX"},
     {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5"},
 };
 

@@ -94,25 +94,30 @@ bool has_timing_provenance(const RunRecord& r) {
 }
 }  // namespace
 
-void print_report(const std::string& path, const std::string& format) {
-  const auto runs = read_runs(path, false);
-  if (format == "json") {
-    std::cout << "[";
-    for (size_t i = 0; i < runs.size(); ++i) {
-      std::cout << (i ? ",\n " : "\n ") << "{\"run\": \"" << json_escape(runs[i].name) << "\"";
-      for (const auto& [k, v] : runs[i].attrs) std::cout << ", \"" << json_escape(k) << "\": " << json_value(v);
-      // Derived, for runs that carry the timing provenance: whether the timings are suspect, and why.
-      if (has_timing_provenance(runs[i])) {
-        const std::string why = timing_warning(runs[i]);
-        std::cout << ", \"timing_suspect\": " << (why.empty() ? "false" : "true");
-        if (!why.empty()) std::cout << ", \"timing_note\": \"" << json_escape(why) << "\"";
-      }
-      std::cout << "}";
+void warn_skipped(const std::string& command, const std::vector<std::string>& skipped) {
+  for (const auto& s : skipped) std::cerr << command << ": skipped unreadable run: " << s << "\n";
+}
+
+namespace {
+void print_json(const std::vector<RunRecord>& runs) {
+  std::cout << "[";
+  for (size_t i = 0; i < runs.size(); ++i) {
+    std::cout << (i ? ",\n " : "\n ") << "{\"run\": \"" << json_escape(runs[i].name) << "\"";
+    for (const auto& [k, v] : runs[i].attrs) std::cout << ", \"" << json_escape(k) << "\": " << json_value(v);
+    // Derived, for runs that carry the timing provenance: whether the timings are suspect, and why.
+    if (has_timing_provenance(runs[i])) {
+      const std::string why = timing_warning(runs[i]);
+      std::cout << ", \"timing_suspect\": " << (why.empty() ? "false" : "true");
+      if (!why.empty()) std::cout << ", \"timing_note\": \"" << json_escape(why) << "\"";
     }
-    std::cout << "\n]\n";
-    return;
+    std::cout << "}";
   }
-  if (format != "table") throw Error("report: unknown format '" + format + "' (valid: table, json)");
+  std::cout << "\n]\n";
+}
+}  // namespace
+
+namespace {
+void print_tables(const std::vector<RunRecord>& runs) {
   // One table per level of run, with the columns that matter for it.
   const std::vector<std::pair<std::string, std::vector<std::string>>> layouts = {
       {"simulation", {"scene", "solver", "form_used", "status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"}},
@@ -153,6 +158,17 @@ void print_report(const std::string& path, const std::string& format) {
                 << ", or OpenMP threads spinning (wait policy not passive); rerun on a quiet machine\n";
     std::cout << "\n";
   }
+}
+}  // namespace
+
+int print_report(const std::string& path, const std::string& format) {
+  if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
+  std::vector<std::string> skipped;
+  const auto runs = read_runs(path, false, &skipped);
+  if (format == "json") print_json(runs);
+  else print_tables(runs);
+  warn_skipped("report", skipped);
+  return static_cast<int>(skipped.size());
 }
 
 }  // namespace xb

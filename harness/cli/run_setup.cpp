@@ -1,5 +1,6 @@
 #include "run_setup.hpp"
 
+#include "args.hpp"
 #include "profile.hpp"
 
 #include "../../core/error.hpp"
@@ -18,6 +19,12 @@ Params resolve_params(const std::string& scene, const std::vector<std::string>& 
   for (const auto& kv : sets) apply_set(p, kv);
   validate(p);
   return p;
+}
+
+double time_budget_flag(const Args& args, const std::string& command) {
+  const double s = args.get_double("--time-budget", default_time_budget);
+  if (s < 0) throw Error(command + ": --time-budget must be >= 0 (s; 0 = no limit)");
+  return s;
 }
 
 void apply_set(Params& p, const std::string& kv) {

@@ -10,7 +10,6 @@
 #include "../../problems/scene.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -36,11 +35,8 @@ std::string join(const std::vector<std::string>& v, const std::string& sep = ", 
 }
 
 double parse_number(const std::string& where, const std::string& key, const std::string& text) {
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v))
-    throw Error(where + ": '" + key + "' = '" + text + "': not a finite number");
+  double v = 0;
+  if (const std::string why = parse_finite(text, v); !why.empty()) throw Error(where + ": '" + key + "' = '" + text + "': " + why);
   return v;
 }
 
@@ -244,9 +240,16 @@ std::string sweep_base_hash(const SweepSpec& spec) {
 std::vector<SweepJob> expand_sweep(const SweepSpec& spec) {
   const Params base = base_params(spec);
   const std::string hash = sweep_base_hash(spec);
-  size_t points = 1;
-  for (const auto& [k, v] : spec.grid) points *= v.size();
-  if (points * spec.solvers.size() * spec.repeats > 1000000) throw Error(spec.path + ": the sweep has over 1e6 runs");
+  // The run count, multiplied with a cap so that no product overflows (2^64 points must not wrap to 0).
+  constexpr size_t max_runs = 1000000;
+  size_t points = 1, runs = spec.solvers.size() * static_cast<size_t>(spec.repeats);
+  for (const auto& [k, v] : spec.grid) {
+    points *= v.size();
+    if (points > max_runs || runs * v.size() > max_runs)
+      throw Error(spec.path + ": the sweep has over 1e6 runs (reached at grid axis '" + k + "')");
+    runs *= v.size();
+  }
+  if (runs > max_runs) throw Error(spec.path + ": the sweep has over 1e6 runs");
   std::vector<SweepJob> jobs;
   for (size_t pt = 0; pt < points; ++pt) {
     Params p = base;
@@ -267,6 +270,7 @@ std::vector<SweepJob> expand_sweep(const SweepSpec& spec) {
     if (point_text.empty()) point_text = "-";
     try {
       validate(p);
+      check_scene_keys(p);
     } catch (const Error& e) {
       throw Error(spec.path + ": grid point " + point_text + ": " + e.what());
     }

@@ -6,7 +6,7 @@
 //   solvers = ["mgpbd", "cholmod"]
 //   frames = 1                          # optional, as --frames
 //   repeats = 1                         # optional, runs per grid point and solver
-//   time_budget = 0                     # optional, s per run (0 = none)
+//   time_budget = 3600                  # optional, s per run (0 = none; default 3600)
 //   reference = false                   # optional, per-substep reference + position_error
 //   description = "..."                 # optional, free text
 //   [set]                               # fixed overrides, as with --set
@@ -17,6 +17,8 @@
 //   time_budget = 600                   #   any key above; set.KEY / grid.KEY entries replace or add
 //   grid.resolution = [16, 32, 64]      #   to those of [set] / [grid]
 #pragma once
+
+#include "run_setup.hpp"
 
 #include "../params.hpp"
 
@@ -32,7 +34,7 @@ struct SweepSpec {
   std::string scene;                   // resolved scene file
   std::vector<std::string> solvers;
   int repeats = 1;
-  double time_budget = 0;
+  double time_budget = default_time_budget;
   bool reference = false;
   std::string description;
   std::vector<std::string> sets;       // "key=value", in order (frames first if given)

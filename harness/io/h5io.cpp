@@ -2,7 +2,11 @@
 
 #include "../../core/error.hpp"
 
+#include <cstring>
+#include <filesystem>
 #include <vector>
+
+namespace fs = std::filesystem;
 
 namespace xb::h5 {
 
@@ -63,63 +67,179 @@ void write_dataset(hid_t group, const std::string& name, const DataValue& v) {
   }
 }
 
-AttrValue read_attr(hid_t a) {
+namespace {
+// Element counts above this are refused before any allocation: no results or system array comes
+// near it, and a damaged header must not ask for terabytes.
+constexpr hssize_t max_elements = hssize_t{1} << 31;
+
+// The number of elements of a dataspace; throws unless it is scalar or 1-D (attributes: one element).
+hssize_t extent(hid_t space, const std::string& where, bool attribute) {
+  if (space < 0) throw Error(where + ": cannot read its shape");
+  const int nd = H5Sget_simple_extent_ndims(space);
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  if (nd < 0 || n < 0) throw Error(where + ": cannot read its shape");
+  if (H5Sget_simple_extent_type(space) == H5S_NULL) throw Error(where + ": has no value (null dataspace)");
+  if (attribute && n != 1)
+    throw Error(where + ": is an array of " + std::to_string(n) + " values, expected a single value");
+  if (!attribute && nd != 1) throw Error(where + ": has " + std::to_string(nd) + " dimensions, expected a 1-D array");
+  if (n > max_elements) throw Error(where + ": declares " + std::to_string(n) + " values, more than can be read");
+  return n;
+}
+
+// Fixed-length string values of `size` bytes each, NUL-padded or not: each to its first NUL.
+std::vector<std::string> split_fixed(const std::vector<char>& buf, size_t size, hssize_t n) {
+  std::vector<std::string> out;
+  for (hssize_t i = 0; i < n; ++i) {
+    const char* p = buf.data() + i * size;
+    out.emplace_back(p, strnlen(p, size));
+  }
+  return out;
+}
+
+// n strings of the string type `t` through `read(memtype, buffer)` (H5Aread or H5Dread).
+template <class Read>
+std::vector<std::string> read_strings(hid_t t, hssize_t n, const std::string& where, Read read) {
+  const htri_t vlen = H5Tis_variable_str(t);
+  if (vlen < 0) throw Error(where + ": cannot read its string type");
+  if (vlen) {
+    H mt(H5Tcopy(t), H5Tclose);  // same character set as the file: no conversion path needed
+    check_id(mt, where + ": string type");
+    std::vector<char*> p(n, nullptr);
+    if (read(mt.id, p.data()) < 0) throw Error(where + ": cannot read its strings");
+    std::vector<std::string> out;
+    for (char* c : p) {
+      out.emplace_back(c ? c : "");
+      H5free_memory(c);
+    }
+    return out;
+  }
+  const size_t size = H5Tget_size(t);
+  if (size == 0 || size > (size_t{1} << 24)) throw Error(where + ": fixed-length strings of " + std::to_string(size) + " bytes");
+  if (static_cast<double>(size) * n > 1e9) throw Error(where + ": " + std::to_string(n) + " strings of " + std::to_string(size) + " bytes, too large");
+  std::vector<char> buf(size * n + 1, '\0');
+  if (read(t, buf.data()) < 0) throw Error(where + ": cannot read its strings");
+  return split_fixed(buf, size, n);
+}
+}  // namespace
+
+AttrValue read_attr(hid_t a, const std::string& where) {
   H t(H5Aget_type(a), H5Tclose);
+  if (t < 0) throw Error(where + ": cannot read its type");
+  H space(H5Aget_space(a), H5Sclose);
+  extent(space, where, true);
+  auto read = [&](hid_t mt, void* buf) { return H5Aread(a, mt, buf); };
   switch (H5Tget_class(t)) {
     case H5T_INTEGER: {
       long long v = 0;
-      check(H5Aread(a, H5T_NATIVE_LLONG, &v), "read attribute");
+      if (read(H5T_NATIVE_LLONG, &v) < 0) throw Error(where + ": cannot read it as an integer");
       return v;
     }
     case H5T_FLOAT: {
       double v = 0;
-      check(H5Aread(a, H5T_NATIVE_DOUBLE, &v), "read attribute");
+      if (read(H5T_NATIVE_DOUBLE, &v) < 0) throw Error(where + ": cannot read it as a number");
       return v;
     }
-    case H5T_STRING: {
-      if (H5Tis_variable_str(t)) {
-        char* s = nullptr;
-        H mt(string_type(), H5Tclose);
-        check(H5Aread(a, mt, &s), "read attribute");
-        std::string out = s ? s : "";
-        H5free_memory(s);
-        return out;
-      }
-      std::string out(H5Tget_size(t), '\0');
-      check(H5Aread(a, t, out.data()), "read attribute");
-      return std::string(out.c_str());
-    }
-    default: return std::string("<unsupported>");
+    case H5T_STRING: return read_strings(t, 1, where, read)[0];
+    default: throw Error(where + ": has an unsupported type (expected an integer, a float or a string)");
   }
 }
 
-DataValue read_dataset(hid_t ds) {
+std::map<std::string, AttrValue> read_attrs(hid_t obj, const std::string& where) {
+  H5O_info_t oi;
+  if (H5Oget_info2(obj, &oi, H5O_INFO_NUM_ATTRS) < 0) throw Error(where + ": cannot list its attributes");
+  std::map<std::string, AttrValue> out;
+  for (hsize_t i = 0; i < oi.num_attrs; ++i) {
+    H a(H5Aopen_by_idx(obj, ".", H5_INDEX_NAME, H5_ITER_INC, i, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+    if (a < 0) throw Error(where + ": cannot open attribute #" + std::to_string(i));
+    const ssize_t len = H5Aget_name(a, 0, nullptr);
+    if (len < 0) throw Error(where + ": cannot read the name of attribute #" + std::to_string(i));
+    std::string name(len + 1, '\0');
+    H5Aget_name(a, name.size(), name.data());
+    name.resize(len);
+    out[name] = read_attr(a, where + " attribute '" + name + "'");
+  }
+  return out;
+}
+
+DataValue read_dataset(hid_t ds, const std::string& where) {
   H t(H5Dget_type(ds), H5Tclose);
+  if (t < 0) throw Error(where + ": cannot read its type");
   H space(H5Dget_space(ds), H5Sclose);
-  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  const hssize_t n = extent(space, where, false);
+  auto read = [&](hid_t mt, void* buf) { return n ? H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) : herr_t{0}; };
   switch (H5Tget_class(t)) {
     case H5T_INTEGER: {
       std::vector<long long> v(n);
-      if (n) check(H5Dread(ds, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read dataset");
+      if (read(H5T_NATIVE_LLONG, v.data()) < 0) throw Error(where + ": cannot read it as integers");
       return v;
     }
     case H5T_FLOAT: {
       std::vector<double> v(n);
-      if (n) check(H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read dataset");
+      if (read(H5T_NATIVE_DOUBLE, v.data()) < 0) throw Error(where + ": cannot read it as numbers");
       return v;
     }
-    default: {
-      std::vector<char*> p(n, nullptr);
-      H mt(string_type(), H5Tclose);
-      if (n) check(H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), "read dataset");
-      std::vector<std::string> v;
-      for (char* s : p) {
-        v.push_back(s ? s : "");
-        H5free_memory(s);
-      }
-      return v;
-    }
+    case H5T_STRING: return read_strings(t, n, where, read);
+    default: throw Error(where + ": has an unsupported type (expected integers, floats or strings)");
   }
+}
+
+Kind link_kind(hid_t loc, const std::string& name) {
+  if (H5Lexists(loc, name.c_str(), H5P_DEFAULT) <= 0) return Kind::missing;  // < 0: a missing parent
+  if (H5Oexists_by_name(loc, name.c_str(), H5P_DEFAULT) <= 0) return Kind::dangling;
+  H5O_info_t oi;
+  if (H5Oget_info_by_name2(loc, name.c_str(), &oi, H5O_INFO_BASIC, H5P_DEFAULT) < 0) return Kind::dangling;
+  if (oi.type == H5O_TYPE_GROUP) return Kind::group;
+  if (oi.type == H5O_TYPE_DATASET) return Kind::dataset;
+  return Kind::other;
+}
+
+const char* kind_text(Kind k) {
+  switch (k) {
+    case Kind::missing: return "missing";
+    case Kind::dangling: return "a dangling link (to nothing)";
+    case Kind::group: return "a group";
+    case Kind::dataset: return "a dataset";
+    default: return "neither a group nor a dataset";
+  }
+}
+
+namespace {
+hid_t open_kind(hid_t loc, const std::string& name, const std::string& where, Kind want) {
+  const Kind k = link_kind(loc, name);
+  const char* what = want == Kind::group ? "a group" : "a dataset";
+  if (k != want) throw Error(where + ": " + name + " is " + kind_text(k) + ", expected " + what);
+  const hid_t id = want == Kind::group ? H5Gopen2(loc, name.c_str(), H5P_DEFAULT) : H5Dopen2(loc, name.c_str(), H5P_DEFAULT);
+  if (id < 0) throw Error(where + ": cannot open " + name);
+  return id;
+}
+}  // namespace
+
+hid_t open_group(hid_t loc, const std::string& name, const std::string& where) { return open_kind(loc, name, where, Kind::group); }
+hid_t open_dataset(hid_t loc, const std::string& name, const std::string& where) { return open_kind(loc, name, where, Kind::dataset); }
+
+std::vector<std::string> link_names(hid_t group, const std::string& where) {
+  H5G_info_t info;
+  if (H5Gget_info(group, &info) < 0) throw Error(where + ": cannot list its members");
+  std::vector<std::string> names;
+  for (hsize_t i = 0; i < info.nlinks; ++i) {
+    const ssize_t len = H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+    if (len < 0) throw Error(where + ": cannot read the name of member #" + std::to_string(i));
+    std::string name(len + 1, '\0');
+    H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(), H5P_DEFAULT);
+    name.resize(len);
+    names.push_back(name);
+  }
+  return names;
+}
+
+hid_t open_file(const std::string& path) {
+  silence_errors();
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an HDF5 file");
+  if (!fs::exists(path, ec)) throw Error(path + ": no such file");
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) throw Error(path + ": not an HDF5 file (or unreadable)");
+  return f;
 }
 
 void silence_errors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }

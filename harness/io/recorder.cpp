@@ -1,6 +1,7 @@
 #include "recorder.hpp"
 #include "schema.hpp"
 
+#include "atomic_file.hpp"
 #include "h5io.hpp"
 
 #include "../../core/error.hpp"
@@ -9,8 +10,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <fcntl.h>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -30,7 +29,6 @@ namespace {
 
 using namespace h5;
 
-
 void write_run(hid_t file, const RunRecord& r) {
   H lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
   H5Pset_create_intermediate_group(lcpl, 1);
@@ -43,93 +41,94 @@ void write_run(hid_t file, const RunRecord& r) {
   for (const auto& [k, v] : r.datasets) write_dataset(g, k, v);
 }
 
-void fsync_path(const std::string& path) {
-  int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
-}
-
 struct Silence {  // HDF5 prints error stacks by default; we report our own messages.
   Silence() { silence_errors(); }
 };
 const Silence silence_hdf5;
 
+// One run group: its attributes, and (with_datasets) every dataset in it, including those in
+// subgroups, by relative path. Throws xb::Error naming `where` and the object.
+RunRecord read_run(hid_t runs, const std::string& name, const std::string& where, bool with_datasets) {
+  RunRecord r;
+  r.name = name;
+  const std::string run = where + ": run " + name;
+  const Kind k = link_kind(runs, name);
+  if (k != Kind::group) throw Error(run + " is " + kind_text(k) + ", not a run group");
+  H g(H5Gopen2(runs, name.c_str(), H5P_DEFAULT), H5Gclose);
+  if (g < 0) throw Error(run + ": cannot open");
+  r.attrs = read_attrs(g, run);
+  if (!with_datasets) return r;
+  struct Ctx {
+    RunRecord* r;
+    std::string where, error;
+  } ctx{&r, run + " dataset ", ""};
+  // No exception may cross HDF5's C frames: the callback stops the walk and keeps the message.
+  const herr_t e = H5Ovisit2(
+      g, H5_INDEX_NAME, H5_ITER_INC,
+      [](hid_t obj, const char* nm, const H5O_info_t* oinfo, void* data) -> herr_t {
+        if (oinfo->type != H5O_TYPE_DATASET) return 0;
+        auto* c = static_cast<Ctx*>(data);
+        try {
+          H ds(H5Dopen2(obj, nm, H5P_DEFAULT), H5Dclose);
+          if (ds < 0) throw Error(c->where + nm + ": cannot open");
+          c->r->datasets[nm] = read_dataset(ds, c->where + nm);
+        } catch (const std::exception& ex) {
+          c->error = ex.what();
+          return -1;
+        }
+        return 0;
+      },
+      &ctx, H5O_INFO_BASIC);
+  if (!ctx.error.empty()) throw Error(ctx.error);
+  if (e < 0) throw Error(run + ": cannot list its datasets");
+  return r;
+}
+
 }  // namespace
 
 void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh) {
   for (const auto& r : runs) check_against_schema(r);
-  const std::string tmp = path + ".tmp";
-  std::error_code ec;
-  fs::remove(tmp, ec);
+  TmpFile tmp(path);  // removed on every failure path
   hid_t fid;
+  std::error_code ec;
   if (!fresh && fs::exists(path)) {
-    fs::copy_file(path, tmp, fs::copy_options::overwrite_existing, ec);
-    if (ec) throw Error("cannot copy " + path + " to " + tmp + ": " + ec.message());
-    fid = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    fs::copy_file(path, tmp.path(), fs::copy_options::overwrite_existing, ec);
+    if (ec) throw Error("cannot copy " + path + " to " + tmp.path() + ": " + ec.message());
+    fid = H5Fopen(tmp.path().c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
     if (fid < 0) throw Error(path + ": not a readable HDF5 results file");
   } else {
-    if (path.find('/') != std::string::npos) fs::create_directories(fs::path(path).parent_path(), ec);
-    fid = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    if (fid < 0) throw Error("cannot create " + tmp);
-    write_attr(fid, "schema_version", static_cast<long long>(schema_version));
-    write_attr(fid, "generator", std::string("xpbd-bench"));
+    if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path(), ec);
+    fid = H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (fid < 0) throw Error("cannot create " + tmp.path());
   }
-  try {
+  {
     H file(fid, H5Fclose);
+    if (fresh || !fs::exists(path)) {
+      write_attr(file, "schema_version", static_cast<long long>(schema_version));
+      write_attr(file, "generator", std::string("xpbd-bench"));
+    } else if (link_kind(file, "/runs") != Kind::group) {
+      throw Error(path + ": not an xpbd-bench results file (no group /runs); refusing to append to it");
+    }
     for (const auto& r : runs) write_run(file, r);
     check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
-  } catch (...) {
-    fs::remove(tmp, ec);
-    throw;
   }
-  fsync_path(tmp);
-  fs::rename(tmp, path, ec);
-  if (ec) throw Error("cannot rename " + tmp + " to " + path + ": " + ec.message());
-  fsync_path(fs::path(path).has_parent_path() ? fs::path(path).parent_path().string() : ".");
+  tmp.commit();
 }
 
-std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets) {
-  if (!fs::exists(path)) throw Error(path + ": no such file");
-  hid_t fid = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (fid < 0) throw Error(path + ": not an HDF5 file");
-  H file(fid, H5Fclose);
+std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets, std::vector<std::string>* skipped) {
+  H file(open_file(path), H5Fclose);
+  const Kind k = link_kind(file, "/runs");
+  if (k == Kind::missing) throw Error(path + ": not an xpbd-bench results file (no group /runs)");
+  if (k != Kind::group) throw Error(path + ": /runs is " + std::string(kind_text(k)) + ", expected the group of runs");
+  H runs(open_group(file, "/runs", path), H5Gclose);
   std::vector<RunRecord> out;
-  if (H5Lexists(file, "/runs", H5P_DEFAULT) <= 0) return out;
-  H runs(H5Gopen2(file, "/runs", H5P_DEFAULT), H5Gclose);
-  H5G_info_t info;
-  check(H5Gget_info(runs, &info), "group info");
-  for (hsize_t i = 0; i < info.nlinks; ++i) {
-    char name[1024];
-    H5Lget_name_by_idx(runs, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT);
-    RunRecord r;
-    r.name = name;
-    H g(H5Gopen2(runs, name, H5P_DEFAULT), H5Gclose);
-    H5O_info_t oi;
-    H5Oget_info2(g, &oi, H5O_INFO_NUM_ATTRS);
-    for (hsize_t a = 0; a < oi.num_attrs; ++a) {
-      H attr(H5Aopen_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, a, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-      char an[1024];
-      H5Aget_name(attr, sizeof an, an);
-      r.attrs[an] = read_attr(attr);
+  for (const auto& name : link_names(runs, path + ": /runs")) {
+    try {
+      out.push_back(read_run(runs, name, path, with_datasets));
+    } catch (const Error& e) {
+      if (!skipped) throw;
+      skipped->push_back(e.what());
     }
-    if (with_datasets) {
-      // Every dataset in the run group, including those in subgroups, by its relative path.
-      struct Ctx {
-        RunRecord* r;
-      } ctx{&r};
-      H5Ovisit2(
-          g, H5_INDEX_NAME, H5_ITER_INC,
-          [](hid_t obj, const char* nm, const H5O_info_t* oinfo, void* data) -> herr_t {
-            if (oinfo->type != H5O_TYPE_DATASET) return 0;
-            H ds(H5Dopen2(obj, nm, H5P_DEFAULT), H5Dclose);
-            static_cast<Ctx*>(data)->r->datasets[nm] = read_dataset(ds);
-            return 0;
-          },
-          &ctx, H5O_INFO_BASIC);
-    }
-    out.push_back(std::move(r));
   }
   return out;
 }

@@ -33,8 +33,11 @@ std::string attr_value_text(const AttrValue& v, int digits);
 void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh = false);
 
 // Reads every run (attributes; datasets too if with_datasets). Throws xb::Error for a file
-// that is missing or not an xpbd-bench results file.
-std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets = false);
+// that is missing, not HDF5 or without the group /runs. A run that cannot be read (not a group,
+// a dangling link, an attribute that is an array or of another type, ...) throws too, unless
+// `skipped` is given: then it is left out and its error ("FILE: ... run NAME ...") appended there.
+std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets = false,
+                                 std::vector<std::string>* skipped = nullptr);
 
 // The number of runs in a file (0 if it does not exist).
 int count_runs(const std::string& path);

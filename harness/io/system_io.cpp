@@ -1,5 +1,6 @@
 #include "system_io.hpp"
 
+#include "atomic_file.hpp"
 #include "h5io.hpp"
 
 #include "../../core/error.hpp"
@@ -12,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <type_traits>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -32,35 +34,22 @@ void write_array(hid_t file, const char* name, const T* data, hsize_t n, hid_t t
   if (n) check(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), std::string("write ") + name);
 }
 
+// A 1-D numeric dataset; integers are refused where floats are stored and the other way round
+// only when T is an integer type (indices must not be rounded).
 template <class T>
-std::vector<T> read_array(hid_t file, const std::string& path, const char* name, hid_t type) {
-  if (H5Lexists(file, name, H5P_DEFAULT) <= 0) {
-    // H5Lexists on "/A/indptr" fails when /A is missing; both mean the same here.
-    throw Error(path + ": not a captured system (no dataset " + name + ")");
-  }
-  H ds(H5Dopen2(file, name, H5P_DEFAULT), H5Dclose);
-  if (ds < 0) throw Error(path + ": cannot open dataset " + name);
-  H space(H5Dget_space(ds), H5Sclose);
-  if (H5Sget_simple_extent_ndims(space) != 1) throw Error(path + ": dataset " + std::string(name) + " is not 1-D");
-  std::vector<T> v(H5Sget_simple_extent_npoints(space));
-  if (!v.empty()) check(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), path + ": read " + name);
-  return v;
+std::vector<T> read_array(hid_t file, const std::string& path, const std::string& name) {
+  H ds(open_dataset(file, name, path), H5Dclose);
+  DataValue v = read_dataset(ds, path + ": " + name);
+  if (auto* i = std::get_if<std::vector<long long>>(&v)) return std::vector<T>(i->begin(), i->end());
+  if (auto* d = std::get_if<std::vector<double>>(&v); d && std::is_floating_point_v<T>) return std::vector<T>(d->begin(), d->end());
+  throw Error(path + ": " + name + " holds " + (std::holds_alternative<std::vector<double>>(v) ? "floats" : "strings") +
+              ", expected " + (std::is_floating_point_v<T> ? "numbers" : "integers"));
 }
 
 struct Silence {  // HDF5 prints error stacks by default; we report our own messages.
   Silence() { silence_errors(); }
 };
 const Silence silence_hdf5;
-
-// Writes through NAME.tmp and renames, so that readers never see a partial file.
-void replace_atomically(const std::string& path, const std::string& tmp) {
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    throw Error("cannot rename " + tmp + " to " + path);
-  }
-}
 
 void make_parent(const std::string& path) {
   const fs::path parent = fs::path(path).parent_path();
@@ -83,22 +72,21 @@ std::string lower(std::string s) {
   return s;
 }
 
-// Writes a text file through PATH.tmp (written by `body`, checked, renamed over PATH), so that
-// readers never see a partial file.
+// Writes a text file through PATH.tmp (written by `body`, checked, renamed over PATH).
 void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body) {
   make_parent(path);
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) throw Error("cannot create " + tmp);
-  body(f);
-  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
-  std::fclose(f);
-  if (!ok) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw Error("cannot write " + tmp);
+  TmpFile tmp(path);
+  std::FILE* f = std::fopen(tmp.path().c_str(), "w");
+  if (!f) throw Error("cannot create " + tmp.path());
+  try {
+    body(f);
+  } catch (...) {
+    std::fclose(f);
+    throw;
   }
-  replace_atomically(path, tmp);
+  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  if (std::fclose(f) != 0 || !ok) throw Error("cannot write " + tmp.path());
+  tmp.commit();
 }
 
 }  // namespace
@@ -150,22 +138,28 @@ void write_csr(hid_t file, const std::string& group, const SparseMatrix& M) {
 
 // A CSR matrix of `rows` × `cols` from /G/indptr, /G/indices, /G/data, every array checked.
 SparseMatrix read_csr(hid_t file, const std::string& path, const std::string& g, long long rows, long long cols) {
-  const auto indptr = read_array<long long>(file, path, (g + "/indptr").c_str(), H5T_NATIVE_LLONG);
-  const auto indices = read_array<long long>(file, path, (g + "/indices").c_str(), H5T_NATIVE_LLONG);
-  const auto data = read_array<double>(file, path, (g + "/data").c_str(), H5T_NATIVE_DOUBLE);
+  const auto indptr = read_array<long long>(file, path, g + "/indptr");
+  const auto indices = read_array<long long>(file, path, g + "/indices");
+  const auto data = read_array<double>(file, path, g + "/data");
+  const long long nnz = static_cast<long long>(data.size());
   if (static_cast<long long>(indptr.size()) != rows + 1)
     throw Error(path + ": " + g + "/indptr has " + std::to_string(indptr.size()) + " entries, expected rows + 1 = " +
                 std::to_string(rows + 1));
-  if (indices.size() != data.size() || indptr.front() != 0 || indptr.back() != static_cast<long long>(data.size()))
-    throw Error(path + ": " + g + "/indptr, " + g + "/indices and " + g + "/data are inconsistent");
-  if (rows > 2147483647LL || cols > 2147483647LL || static_cast<long long>(data.size()) > 2147483647LL)
+  if (indices.size() != data.size())
+    throw Error(path + ": " + g + "/indices has " + std::to_string(indices.size()) + " entries and " + g + "/data " +
+                std::to_string(nnz) + " (they must match)");
+  if (rows > 2147483647LL || cols > 2147483647LL || nnz > 2147483647LL)
     throw Error(path + ": " + g + " too large for 32-bit indices");
   // Every row's range is checked before any entry is read: a row pointer past the arrays
   // must be reported as what it is, not as a bad index somewhere else.
+  if (indptr.front() != 0) throw Error(path + ": " + g + "/indptr starts at " + std::to_string(indptr.front()) + ", expected 0");
   for (long long i = 0; i < rows; ++i)
-    if (indptr[i + 1] < indptr[i] || indptr[i + 1] > static_cast<long long>(data.size()))
-      throw Error(path + ": " + g + "/indptr is not non-decreasing within [0, " + std::to_string(data.size()) +
-                  "] at row " + std::to_string(i));
+    if (indptr[i + 1] < indptr[i] || indptr[i + 1] > nnz)
+      throw Error(path + ": " + g + "/indptr is not non-decreasing within [0, " + std::to_string(nnz) + "] at row " +
+                  std::to_string(i) + " (it overruns or goes back)");
+  if (indptr.back() != nnz)
+    throw Error(path + ": " + g + "/indptr ends at " + std::to_string(indptr.back()) + ", but " + g + "/indices and " + g +
+                "/data have " + std::to_string(nnz) + " entries");
   SparseMatrix M(rows, cols);
   M.resizeNonZeros(static_cast<long>(data.size()));
   for (long long i = 0; i <= rows; ++i) M.outerIndexPtr()[i] = static_cast<int>(indptr[i]);
@@ -187,61 +181,48 @@ void write_system_h5(const std::string& path, const CapturedSystem& sys) {
   if (A.rows() != A.cols() || A.rows() != b.size()) throw Error("write_system_h5: A is not square or b has the wrong size");
   if (!A.isCompressed()) throw Error("write_system_h5: A must be compressed");
   make_parent(path);
-  const std::string tmp = path + ".tmp";
+  TmpFile tmp(path);
   {
-    H file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    if (file < 0) throw Error("cannot create " + tmp);
-    try {
-      const long long n = A.rows(), nnz = A.nonZeros();
-      write_csr(file, "/A", A);
-      write_array(file, "/b", b.data(), static_cast<hsize_t>(n), H5T_NATIVE_DOUBLE);
-      if (sys.has_primal()) {
-        write_csr(file, "/J", jacobian_csr(sys.graph, sys.grad));
-        const auto& w = sys.graph.w;
-        write_array(file, "/inverse_mass", w.data(), static_cast<hsize_t>(w.size()), H5T_NATIVE_DOUBLE);
-        write_array(file, "/alpha_tilde", sys.alpha_tilde.data(), static_cast<hsize_t>(sys.alpha_tilde.size()), H5T_NATIVE_DOUBLE);
-        write_array(file, "/positions", sys.x.data(), static_cast<hsize_t>(sys.x.size()), H5T_NATIVE_DOUBLE);
-      }
-      for (const auto& [k, v] : sys.attrs) write_attr(file, k, v);
-      write_attr(file, "kind", std::string("dual_system"));
-      write_attr(file, "generator", std::string("xpbd-bench"));
-      write_attr(file, "rows", n);
-      write_attr(file, "nnz", nnz);
-      check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
-    } catch (...) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw;
+    H file(H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    if (file < 0) throw Error("cannot create " + tmp.path());
+    const long long n = A.rows(), nnz = A.nonZeros();
+    write_csr(file, "/A", A);
+    write_array(file, "/b", b.data(), static_cast<hsize_t>(n), H5T_NATIVE_DOUBLE);
+    if (sys.has_primal()) {
+      write_csr(file, "/J", jacobian_csr(sys.graph, sys.grad));
+      const auto& w = sys.graph.w;
+      write_array(file, "/inverse_mass", w.data(), static_cast<hsize_t>(w.size()), H5T_NATIVE_DOUBLE);
+      write_array(file, "/alpha_tilde", sys.alpha_tilde.data(), static_cast<hsize_t>(sys.alpha_tilde.size()), H5T_NATIVE_DOUBLE);
+      write_array(file, "/positions", sys.x.data(), static_cast<hsize_t>(sys.x.size()), H5T_NATIVE_DOUBLE);
     }
+    for (const auto& [k, v] : sys.attrs) write_attr(file, k, v);
+    write_attr(file, "kind", std::string("dual_system"));
+    write_attr(file, "generator", std::string("xpbd-bench"));
+    write_attr(file, "rows", n);
+    write_attr(file, "nnz", nnz);
+    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
   }
-  replace_atomically(path, tmp);
+  tmp.commit();
 }
 
 CapturedSystem read_system_h5(const std::string& path) {
-  if (!fs::exists(path)) throw Error(path + ": no such file");
-  H file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (file < 0) throw Error(path + ": not an HDF5 file");
+  H file(open_file(path), H5Fclose);
   CapturedSystem s;
-  H root(H5Gopen2(file, "/", H5P_DEFAULT), H5Gclose);
-  H5O_info_t oi;
-  check(H5Oget_info2(root, &oi, H5O_INFO_NUM_ATTRS), path + ": root info");
-  for (hsize_t a = 0; a < oi.num_attrs; ++a) {
-    H attr(H5Aopen_by_idx(root, ".", H5_INDEX_NAME, H5_ITER_INC, a, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-    char an[1024];
-    H5Aget_name(attr, sizeof an, an);
-    s.attrs[an] = read_attr(attr);
-  }
+  s.attrs = read_attrs(file, path + ": root");
   if (attr_text(s.attrs, "kind") != "dual_system")
     throw Error(path + ": not a captured system (attribute kind = \"dual_system\" missing; write one with `xpbd-bench capture`)");
-  if (H5Lexists(file, "/A", H5P_DEFAULT) <= 0) throw Error(path + ": not a captured system (no group /A)");
-  const auto b = read_array<double>(file, path, "/b", H5T_NATIVE_DOUBLE);
+  if (const Kind k = link_kind(file, "/A"); k != Kind::group)
+    throw Error(path + ": not a captured system (/A is " + kind_text(k) + ", expected a group)");
+  const auto b = read_array<double>(file, path, "/b");
   const long long n = static_cast<long long>(b.size());
+  if (n == 0) throw Error(path + ": /b is empty (a captured system has at least one row)");
   s.A = read_csr(file, path, "/A", n, n);
   s.b = Eigen::Map<const Vector>(b.data(), n);
-  if (H5Lexists(file, "/J", H5P_DEFAULT) > 0) {
-    const auto w = read_array<double>(file, path, "/inverse_mass", H5T_NATIVE_DOUBLE);
-    const auto at = read_array<double>(file, path, "/alpha_tilde", H5T_NATIVE_DOUBLE);
-    const auto x = read_array<double>(file, path, "/positions", H5T_NATIVE_DOUBLE);
+  if (const Kind k = link_kind(file, "/J"); k != Kind::missing) {
+    if (k != Kind::group) throw Error(path + ": /J is " + std::string(kind_text(k)) + ", expected a group");
+    const auto w = read_array<double>(file, path, "/inverse_mass");
+    const auto at = read_array<double>(file, path, "/alpha_tilde");
+    const auto x = read_array<double>(file, path, "/positions");
     const long long np = static_cast<long long>(w.size());
     if (static_cast<long long>(at.size()) != n) throw Error(path + ": /alpha_tilde has " + std::to_string(at.size()) + " entries, expected rows = " + std::to_string(n));
     if (static_cast<long long>(x.size()) != 3 * np) throw Error(path + ": /positions has " + std::to_string(x.size()) + " entries, expected 3 x particles = " + std::to_string(3 * np));

@@ -9,12 +9,14 @@
 
 namespace xb {
 
-CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration) {
+CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration,
+                              double time_budget) {
   if (p.frames < frame + 1) p.frames = frame + 1;
   const Problem prob = build_problem(p);
   CapturedSystem sys;
   bool captured = false;
   RunOptions opt;
+  opt.time_budget = time_budget;
   opt.on_system = [&](const SystemView& v) {
     if (v.frame != frame || v.substep != substep || v.iteration != iteration) return false;
     sys.A = v.A;

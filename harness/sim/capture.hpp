@@ -14,7 +14,8 @@ namespace xb {
 // Runs `driver` (a global method; cholmod by default elsewhere, so that the system does not depend
 // on the solver under test) on the scene of `p` until the system of (frame, substep, iteration)
 // is assembled, and returns it; p.frames is raised to reach the frame. Throws xb::Error saying
-// where the run stopped if it never gets there.
-CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration);
+// where the run stopped if it never gets there (time_budget: s, 0 = none, as RunOptions).
+CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration,
+                              double time_budget = 0);
 
 }  // namespace xb

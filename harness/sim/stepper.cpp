@@ -76,6 +76,8 @@ class Simulation {
     double dual, authors;
   };
   void substep(int frame, int sub);
+  // Past RunOptions::time_budget (less `excluded` s of this substep's reference): fail("timeout").
+  bool over_budget(double excluded);
   // Logs the state at iteration `it`; returns both residuals.
   Residuals log_state(int frame, int sub, int it, const LastStep& last, double& r0);
   // x += step·Δx, λ += (1 or t)·Δλ by Params::step; returns the step length.
@@ -159,7 +161,17 @@ RunResult Simulation::run() {
   return std::move(res_);
 }
 
+// Checked every outer iteration and every substep, so that no count of either escapes it.
+bool Simulation::over_budget(double excluded) {
+  if (opt_.time_budget <= 0 || run_clock_.seconds() - res_.reference_time - excluded <= opt_.time_budget) return false;
+  char budget[32];
+  std::snprintf(budget, sizeof budget, "%g", opt_.time_budget);
+  fail("timeout", std::string("time budget of ") + budget + " s exceeded");
+  return true;
+}
+
 void Simulation::substep(int frame, int sub) {
+  if (over_budget(0)) return;
   Particles& P = prob_.particles;
   sub_clock_.reset();
   x_old_ = P.x;
@@ -204,12 +216,7 @@ void Simulation::substep(int frame, int sub) {
       break;
     }
     if (it >= p_.max_iterations) break;
-    if (opt_.time_budget > 0 && run_clock_.seconds() - res_.reference_time - excluded_ > opt_.time_budget) {
-      char budget[32];
-      std::snprintf(budget, sizeof budget, "%g", opt_.time_budget);
-      fail("timeout", std::string("time budget of ") + budget + " s exceeded");
-      break;
-    }
+    if (over_budget(excluded_)) break;
     Timer step_clock;
     if (!step(frame, sub, it, last)) break;
     project_colliders(prob_, P.x);

@@ -3,6 +3,7 @@
 #include "text_lines.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <map>
 
 namespace xb {
@@ -10,6 +11,18 @@ namespace xb {
 using namespace mesh_text;
 
 namespace {
+// The next value of entry i (0-based) of a section of n; a keyword there means the section ended
+// early: the count is larger than the data (numbers never start with a letter, but nan and inf).
+std::string_view entry_token(Lines& L, const std::string& what, const char* section, long long i, long long n) {
+  const std::string_view t = L.require_token(what);
+  std::string low(t);
+  for (auto& c : low) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (std::isalpha(static_cast<unsigned char>(t[0])) && low != "nan" && low != "inf" && low != "infinity")
+    throw Error(L.where() + ": " + section + " declares " + std::to_string(n) + " entries, but the section ends after " +
+                std::to_string(i) + " (at '" + std::string(t) + "'): the count is larger than the data");
+  return t;
+}
+
 // The Vertices section after its keyword: count, then x y z ref per vertex. Returns the count.
 long long read_vertices(Lines& L, size_t bytes, TetMesh& mesh, std::vector<int>& vline) {
   const long long nv = parse_count(L.require_token("the number of vertices"), L.where(), "number of vertices", bytes);
@@ -17,7 +30,7 @@ long long read_vertices(Lines& L, size_t bytes, TetMesh& mesh, std::vector<int>&
   vline.resize(nv);
   for (long long i = 0; i < nv; ++i) {
     for (int c = 0; c < 3; ++c)
-      mesh.vertices(c, i) = parse_double(L.require_token("vertex " + std::to_string(i + 1) + " of " + std::to_string(nv)),
+      mesh.vertices(c, i) = parse_double(entry_token(L, "vertex " + std::to_string(i + 1) + " of " + std::to_string(nv), "Vertices", i, nv),
                                          L.where(), "coordinate");
     vline[i] = L.line();
     (void)parse_int(L.require_token("a vertex reference"), L.where(), "vertex reference");
@@ -32,7 +45,7 @@ void read_tetrahedra(Lines& L, size_t bytes, long long nv, TetMesh& mesh, std::v
   tline.resize(nt);
   for (long long t = 0; t < nt; ++t) {
     for (int k = 0; k < 4; ++k) {
-      const long long v = parse_int(L.require_token("tetrahedron " + std::to_string(t + 1) + " of " + std::to_string(nt)),
+      const long long v = parse_int(entry_token(L, "tetrahedron " + std::to_string(t + 1) + " of " + std::to_string(nt), "Tetrahedra", t, nt),
                                     L.where(), "vertex index");
       if (v < 1 || v > nv)
         throw Error(L.where() + ": vertex index " + std::to_string(v) + " out of range [1, " + std::to_string(nv) + "]");

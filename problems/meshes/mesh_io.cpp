@@ -65,13 +65,18 @@ void finish_tet_mesh(TetMesh& mesh, const std::string& vertex_file, const std::v
 
 TetMesh read_tet_mesh(const std::string& path, MeshReadReport* report) {
   const fs::path p(path);
+  std::error_code ec;
+  if (fs::is_directory(p, ec)) throw Error(path + ": is a directory, not a mesh file");
   const std::string ext = p.extension().string();
   if (ext == ".node" || ext == ".ele") {
     fs::path node = p, ele = p;
     node.replace_extension(".node");
     ele.replace_extension(".ele");
-    if (!fs::is_regular_file(node)) throw Error(path + ": the TetGen pair needs " + node.string() + ", which does not exist");
-    if (!fs::is_regular_file(ele)) throw Error(path + ": the TetGen pair needs " + ele.string() + ", which does not exist");
+    for (const fs::path& f : {node, ele}) {
+      std::error_code ec;
+      if (fs::is_directory(f, ec)) throw Error(path + ": the TetGen pair needs the file " + f.string() + ", which is a directory");
+      if (!fs::is_regular_file(f, ec)) throw Error(path + ": the TetGen pair needs " + f.string() + ", which does not exist");
+    }
     return read_tetgen(node.string(), ele.string(), report);
   }
   if (ext == ".msh") return read_gmsh(path, report);

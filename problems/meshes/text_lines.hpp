@@ -17,7 +17,9 @@
 namespace xb::mesh_text {
 
 inline std::string read_whole(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) throw Error(path + ": no such mesh file");
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory, not a mesh file");
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such mesh file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open");
   std::ostringstream ss;
@@ -66,8 +68,13 @@ class Lines {
     return false;
   }
   // As next(), but the end of the file is an error: "truncated while reading <what>".
+  // A gmsh section's end marker where an entry should be: the declared count is larger than the data.
   void require(std::vector<std::string_view>& tokens, const std::string& what) {
-    if (!next(tokens)) throw Error(where() + ": file ends early (truncated?) while reading " + what);
+    if (!next(tokens))
+      throw Error(where() + ": file ends early (truncated?) while reading " + what + " (is a declared count larger than the data?)");
+    if (tokens[0].starts_with("$End") && !what.starts_with("$End"))
+      throw Error(where() + ": the section ends ('" + std::string(tokens[0]) + "') while reading " + what +
+                  ": the declared count is larger than the data");
   }
   // A single token stream across lines (medit), with the line of the last token.
   bool next_token(std::string_view& tok) {

@@ -100,7 +100,14 @@ class DistributedSolver final : public LinearSolver {
       bcast_string(n);
       bcast_string(text);
     }
-    kernel_ = make_distributed_kernel(name, p);
+    std::string error;
+    try {
+      kernel_ = make_distributed_kernel(name, p);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    if (mpi_size() > 1) error = agree_on_errors(error);  // a worker's failure is this run's error
+    if (!error.empty()) throw Error(error);
   }
   ~DistributedSolver() override {
     if (mpi_size() > 1) {
@@ -118,6 +125,9 @@ class DistributedSolver final : public LinearSolver {
     if (nk && nk->rows() != A.rows())
       throw Error(name_ + ": near-kernel basis has " + std::to_string(nk->rows()) + " rows, the matrix " +
                   std::to_string(A.rows()));
+    // Refused on rank 0 before any rank starts: a library meeting NaN on one rank only would
+    // fail there alone, inside its collective calls.
+    require_finite(A.valuePtr(), A.nonZeros(), "the matrix");
     Timer t;
     const int np = mpi_size();
     const auto off = contiguous_rows(A.rows(), np, ctx.block_size);  // throws for a partial block
@@ -150,12 +160,13 @@ class DistributedSolver final : public LinearSolver {
     extract_block(A, nk, off[0], off[1], block_size_, block_, values_only);
     SetupContext local = ctx;  // as on the workers: the near-kernel rows of this block
     local.near_kernel = nk ? &block_.near_kernel : nullptr;
-    kernel_->setup(block_, kind, local);
+    collective([&] { kernel_->setup(block_, kind, local); });
     setup_time_ = t.seconds();
   }
 
   LinearStats solve(const Vector& b, Vector& x) override {
     if (!A_ || b.size() != n_) throw Error(name_ + ": solve() without a matching setup()");
+    require_finite(b.data(), b.size(), "the right-hand side");
     Timer t;
     std::vector<double> bl, xl;
     if (mpi_size() > 1) {
@@ -169,7 +180,8 @@ class DistributedSolver final : public LinearSolver {
     } else {
       bl.assign(b.data(), b.data() + b.size());
     }
-    LinearStats st = kernel_->solve(bl, xl);
+    LinearStats st;
+    collective([&] { st = kernel_->solve(bl, xl); });
     x.resize(n_);
     if (mpi_size() > 1) gather_vector(xl, n_, block_size_, x.data());
     else std::copy(xl.begin(), xl.end(), x.data());
@@ -200,6 +212,24 @@ class DistributedSolver final : public LinearSolver {
   std::string last_setup_action() const override { return kernel_->last_setup_action(); }
 
  private:
+  void require_finite(const double* v, long long n, const char* what) const {
+    for (long long i = 0; i < n; ++i)
+      if (!std::isfinite(v[i])) throw Error(name_ + ": " + what + " has a non-finite value (entry " + std::to_string(i) + ")");
+  }
+  // Runs this rank's part of a command; every rank then learns whether any failed, and rank 0
+  // throws the first failure (a worker's with its rank), as one process would have thrown it.
+  template <class F>
+  void collective(F&& f) {
+    std::string error;
+    try {
+      f();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    if (mpi_size() > 1) error = agree_on_errors(error);
+    if (!error.empty()) throw Error(error);
+  }
+
   std::string name_;
   double tol_;
   long long id_ = 0;
@@ -221,6 +251,19 @@ std::unique_ptr<LinearSolver> make_distributed_solver(const std::string& name, c
 std::unique_ptr<LinearSolver> make_hypre(const SolverSettings& p) { return make_distributed_solver("hypre", p); }
 std::unique_ptr<LinearSolver> make_muelu(const SolverSettings& p) { return make_distributed_solver("muelu", p); }
 
+namespace {
+// What f threw, as text ("" if nothing): a worker's failure goes back to rank 0, it does not end the job.
+template <class F>
+std::string caught(F&& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
 int serve_workers() {
   std::map<long long, std::unique_ptr<DistributedKernel>> kernels;
   std::map<long long, RowBlock> blocks;
@@ -236,7 +279,7 @@ int serve_workers() {
           std::string name, text;
           bcast_string(name);
           bcast_string(text);
-          kernels[id] = make_distributed_kernel(name, deserialize_settings(text));
+          agree_on_errors(caught([&] { kernels[id] = make_distributed_kernel(name, deserialize_settings(text)); }));
           break;
         }
         case kSetup: {
@@ -249,15 +292,16 @@ int serve_workers() {
           SetupContext ctx{static_cast<int>(h.frame), static_cast<int>(h.substep), static_cast<int>(h.iteration)};
           ctx.block_size = bs;
           ctx.near_kernel = h.near_kernel_cols ? &blk.near_kernel : nullptr;  // this rank's rows only
-          kernels.at(id)->setup(blk, h.values ? SetupKind::Values : SetupKind::Structure, ctx);
+          agree_on_errors(caught([&] { kernels.at(id)->setup(blk, h.values ? SetupKind::Values : SetupKind::Structure, ctx); }));
           break;
         }
         case kSolve: {
           std::vector<double> bl, xl;
           const int bs = static_cast<int>(h.block_size);
           scatter_vector(nullptr, h.n_global, bs, bl);
-          kernels.at(id)->solve(bl, xl);
-          gather_vector(xl, h.n_global, bs, nullptr);
+          // A failed solve on any rank: rank 0 throws and gathers nothing.
+          if (agree_on_errors(caught([&] { kernels.at(id)->solve(bl, xl); })).empty())
+            gather_vector(xl, h.n_global, bs, nullptr);
           break;
         }
         case kDestroy:
@@ -271,7 +315,7 @@ int serve_workers() {
       }
     }
   } catch (const std::exception& e) {
-    // A worker cannot report back through the harness: say why and take the job down.
+    // Only a broken protocol gets here (solver failures go back to rank 0): say why and take the job down.
     std::fprintf(stderr, "xpbd-bench (rank %d): %s\n", mpi_rank(), e.what());
     MPI_Abort(MPI_COMM_WORLD, 3);
   }

@@ -70,6 +70,23 @@ void bcast_string(std::string& s) {
   if (len) MPI_Bcast(s.data(), static_cast<int>(len), MPI_CHAR, 0, MPI_COMM_WORLD);
 }
 
+std::string agree_on_errors(const std::string& local_error) {
+  int mine = local_error.empty() ? 0 : 1, any = 0;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (!any) return "";
+  const int np = mpi_size(), rank = mpi_rank();
+  int len = static_cast<int>(local_error.size());
+  std::vector<int> lens(np), displs(np, 0);
+  MPI_Gather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+  for (int r = 1; r < np; ++r) displs[r] = displs[r - 1] + lens[r - 1];
+  std::string all(rank == 0 ? displs[np - 1] + lens[np - 1] : 0, '\0');
+  MPI_Gatherv(local_error.data(), len, MPI_CHAR, all.data(), lens.data(), displs.data(), MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (rank != 0) return "failed";
+  for (int r = 0; r < np; ++r)
+    if (lens[r] > 0) return (r == 0 ? "" : "rank " + std::to_string(r) + ": ") + all.substr(displs[r], lens[r]);
+  return "failed";
+}
+
 std::string serialize_settings(const SolverSettings& p) {
   std::string s;
   for (const auto& f : solver_settings()) s += f.key + "=" + setting_text(f, p) + "\n";

@@ -26,6 +26,11 @@ struct Header {
 void bcast_header(Header& h);
 void bcast_string(std::string& s);
 
+// Collective: every rank passes what went wrong on it ("" = nothing). Returns "" on every rank
+// when nothing did; else a non-empty text on every rank, on rank 0 the first failing rank's
+// message ("rank R: ..." for a worker), so that rank 0 can record it as the run's error.
+std::string agree_on_errors(const std::string& local_error);
+
 // The solver settings as "key=value" lines through their one table (so workers see exactly rank 0's).
 std::string serialize_settings(const SolverSettings& p);
 SolverSettings deserialize_settings(const std::string& text);

@@ -15,7 +15,9 @@
 #include "solvers/linear_solver.hpp"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -343,3 +345,41 @@ TEST(ExternalSolverMpi, SolveCapturedSystemTwoRanksMatchesOneProcess) { expect_t
 TEST(ExternalSolverMpi, SolveCapturedClothTwoRanksMatchesOneProcess) {
   expect_two_ranks_match_one_process("cloth_hang", 64);
 }
+
+// A system with a NaN in the matrix, solved by hypre and muelu with one process and under mpirun
+// with two ranks: each library's run is recorded with status `error` and the same message in both,
+// no run is lost, the exit code is 0 and no .tmp is left (a worker rank used to call MPI_Abort).
+TEST(ExternalSolverMpi, NanSystemRecordsErrorOnEveryRankCount) {
+  const std::string prefix = (scratch() / "nan_sys").string();
+  std::string err;
+  ASSERT_EQ(sh(bench + " capture --scene bar_hang --set resolution=2 --frame 0 --iteration 1 --out " + prefix, &err), 0) << err;
+  {  // the last stored value of A: a row of the last rank's block
+    const hid_t f = H5Fopen((prefix + ".h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    const hid_t ds = H5Dopen2(f, "/A/data", H5P_DEFAULT);
+    const hid_t space = H5Dget_space(ds);
+    const hsize_t n = H5Sget_simple_extent_npoints(space), last = n - 1, one = 1;
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, &last, nullptr, &one, nullptr);
+    const hid_t mem = H5Screate_simple(1, &one, nullptr);
+    const double nan = std::nan("");
+    EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, mem, space, H5P_DEFAULT, &nan), 0);
+    H5Sclose(mem);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(f);
+  }
+  const auto [r1, r2] =
+      one_and_two_ranks(" solve --system " + prefix + ".h5 --solver hypre,muelu --out ", prefix + "_np1.h5", prefix + "_np2.h5");
+  ASSERT_EQ(r1.size(), 2u);
+  ASSERT_EQ(r2.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(std::get<std::string>(r2[i].attrs.at("status")), "error") << r2[i].name;
+    EXPECT_EQ(std::get<std::string>(r1[i].attrs.at("status")), "error") << r1[i].name;
+    const std::string m = std::get<std::string>(r2[i].attrs.at("message"));
+    EXPECT_NE(m.find("non-finite"), std::string::npos) << m;
+    EXPECT_EQ(m, std::get<std::string>(r1[i].attrs.at("message")));
+  }
+  EXPECT_FALSE(fs::exists(prefix + "_np2.h5.tmp"));
+  EXPECT_FALSE(fs::exists(prefix + "_np1.h5.tmp"));
+}
+
