@@ -53,7 +53,7 @@ struct Params {
   // --- in-house MGPBD AMG ---
   double amg_strength_threshold = 0.25;
   std::string amg_aggregation = "standard";
-  std::string amg_near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | rigid
+  std::string amg_near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | gs_authors | rigid
   int amg_near_kernel_sweeps = 20;
   int amg_near_kernel_vectors = 1;
   std::string amg_prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
@@ -65,6 +65,8 @@ struct Params {
   int amg_setup_interval = 20;       // frames between rebuilds of aggregates and P
   int amg_max_coarse = 400;
   int amg_max_levels = 10;
+  std::string amg_coarse_solver = "direct";  // direct (Cholesky) | smoother (the level's smoother from zero)
+  std::string amg_jacobi_omega = "per_level";  // per_level | level0 (lambda_max of level 0 on every level)
   // --- hypre BoomerAMG ---
   std::string hypre_coarsening = "HMIS";    // HMIS | PMIS | Falgout
   std::string hypre_interpolation = "ext+i";  // ext+i | classical | direct | multipass
