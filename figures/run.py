@@ -30,6 +30,10 @@ SPECS = ["squash_xpbd", "squash_mgpbd", "scaling", "near_kernel", "setup_interva
          "cloth_stretch", "theta", "stiffness", "error_time", "dual_primal", "dual_primal_bar"]
 GROUPS = claims.GROUPS
 SIZES = ["default", "paper"]
+# Specs run a second time under `sweep --profile authors` (results NAME.authors.h5): the claims whose
+# numbers depend on the authors' metric, step rule and AMG settings (plots/profile_claims.py).
+PROFILE_SPECS = ["squash_xpbd", "squash_mgpbd", "near_kernel", "setup_interval"]
+PROFILE = "authors"
 
 
 def merged(base, over):
@@ -113,24 +117,26 @@ def ensure_meshes(spec, log):
     return None
 
 
-def run_spec(name, args, inventory, notes):
-    """Runs one sweep; returns the results path (or None) and records why parts did not run."""
+def run_spec(name, args, inventory, notes, profile=""):
+    """Runs one sweep (under `profile` if given: results NAME.PROFILE.h5, notes under
+    NAME@PROFILE); returns the results path (or None) and records why parts did not run."""
     scenes, solvers, unavailable = inventory
+    tag = f"{name}@{profile}" if profile else name
     spec_path = os.path.join(HERE, name + ".toml")
     with open(spec_path, "rb") as f:
         spec = spec_at_size(tomllib.load(f), args.size)
     size_args = ["--size", args.size]
     data_dir = os.path.join(args.out, "data", args.size)
-    out = os.path.join(data_dir, name + ".h5")
+    out = os.path.join(data_dir, name + (f".{profile}" if profile else "") + ".h5")
     scene = spec.get("scene", "")
     if "/" not in scene and not scene.endswith(".toml") and scene not in scenes:
-        notes[name] = f"scene '{scene}' is not registered in this build (xpbd-bench list)"
+        notes[tag] = f"scene '{scene}' is not registered in this build (xpbd-bench list)"
         return out if os.path.exists(out) else None
     wanted = spec.get("solvers", [])
     missing = [s for s in wanted if s not in solvers]
     if missing:
         why = ", ".join(f"{s} ({unavailable.get(s, 'not registered')})" for s in missing)
-        notes[name] = f"solver(s) not available: {why}"
+        notes[tag] = f"solver(s) not available: {why}"
         spec = dict(spec, solvers=[s for s in wanted if s in solvers])
         if not spec["solvers"]:
             return out if os.path.exists(out) else None
@@ -141,8 +147,8 @@ def run_spec(name, args, inventory, notes):
     with open(os.path.join(data_dir, name + ".log"), "a") as log:
         reason = None if args.dry_run else ensure_meshes(spec, log)
         if reason:
-            notes[name] = (notes.get(name, "") + "; " if name in notes else "") + reason
-        cmd = [args.bench, "sweep", spec_path, "--out", out] + size_args
+            notes[tag] = (notes.get(tag, "") + "; " if tag in notes else "") + reason
+        cmd = [args.bench, "sweep", spec_path, "--out", out] + size_args + (["--profile", profile] if profile else [])
         print("$ " + " ".join(cmd), flush=True)
         if args.dry_run:
             return out if os.path.exists(out) else None
@@ -153,7 +159,7 @@ def run_spec(name, args, inventory, notes):
         print(f"  ({time.time() - t0:.0f} s)", flush=True)
         if r.returncode != 0:
             tail = (r.stderr.strip().splitlines() or ["?"])[-1]
-            notes[name] = (notes.get(name, "") + "; " if name in notes else "") + f"sweep failed: {tail}"
+            notes[tag] = (notes.get(tag, "") + "; " if tag in notes else "") + f"sweep failed: {tail}"
     return out if os.path.exists(out) else None
 
 
@@ -172,6 +178,20 @@ def write_summary(S, args, notes, files, elapsed):
         f.write("| claim | quantity | paper | measured | note |\n|---|---|---|---|---|\n")
         for row in S.rows:
             f.write("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in row) + " |\n")
+        if S.paired or S.verdicts:
+            f.write("\n## Each claim twice: under the authors' profile and under the harness's true metric\n\n"
+                    "`authors' profile`: the sweep under `--profile authors` (problems/profiles/authors.toml: their "
+                    "logged residual stops and is reported, line search, θ_s = 0, Jacobi ω of level 0, smoothed "
+                    "coarsest level, bunny 0.2 m tall) — this should match the paper. `harness`: the same sweep "
+                    "with the harness's settings, reporting the true dual residual ‖C(x) + α̃λ‖ — what actually "
+                    "happens. Time to 1e-2: all / without the setup and the first outer iteration (the paper's "
+                    "timing leaves both out).\n\n"
+                    "| claim | quantity | paper | authors' profile | harness (true metric) |\n|---|---|---|---|---|\n")
+            for row in S.paired:
+                f.write("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in row) + " |\n")
+            f.write("\n### Verdicts\n\n")
+            for claim, text in S.verdicts:
+                f.write(f"- **{claim}**: {text}\n")
         for title, text in S.sections:
             f.write(f"\n## {title}\n\n{text}")
         f.write("\n## Figures\n\n")
@@ -210,17 +230,22 @@ def main():
     only = [x for s in only for x in GROUPS.get(s, [s])]
     notes, files = {}, {}
     for name in SPECS:
+        keys = [(name, name + ".h5")] + ([(f"{name}@{PROFILE}", f"{name}.{PROFILE}.h5")] if name in PROFILE_SPECS else [])
         if only and name not in only:
-            p = os.path.join(args.out, "data", args.size, name + ".h5")
-            files[name] = p if os.path.exists(p) else None
-            if not files[name]:
-                notes[name] = "not selected (--only)"
+            for key, fname in keys:
+                p = os.path.join(args.out, "data", args.size, fname)
+                files[key] = p if os.path.exists(p) else None
+                if not files[key]:
+                    notes[key] = "not selected (--only)"
             continue
         if args.fresh:
-            p = os.path.join(args.out, "data", args.size, name + ".h5")
-            if os.path.exists(p):
-                os.remove(p)
+            for _, fname in keys:
+                p = os.path.join(args.out, "data", args.size, fname)
+                if os.path.exists(p):
+                    os.remove(p)
         files[name] = run_spec(name, args, inventory, notes)
+        if name in PROFILE_SPECS:
+            files[f"{name}@{PROFILE}"] = run_spec(name, args, inventory, notes, PROFILE)
     S = claims.Summary()
     for fn in claims.CLAIMS:
         try:

@@ -59,6 +59,8 @@ class Summary:
         self.rows = []  # (claim, quantity, paper, measured, note)
         self.figures = []
         self.sections = []  # (title, Markdown): a claim's own table after the main one
+        self.paired = []  # (claim, quantity, paper, authors' profile, harness): plots/profile_claims.py
+        self.verdicts = []  # (claim, one line)
 
     def add(self, claim, quantity, paper, measured, note=""):
         self.rows.append((claim, quantity, paper, measured, note))
@@ -160,7 +162,7 @@ def claim_near_kernel(S, files, notes, out):
     if not runs:
         S.not_run(claim, notes.get("near_kernel", "no results"))
         return
-    paper = {"ones": "34 (rel. res. 6.4e-7)", "gs": "18 (rel. res. 7.9e-7)"}
+    paper = {"ones": "34 (rel. res. 6.4e-7)", "gs": "— (adaptive SA: 20)", "gs_authors": "18 (rel. res. 7.9e-7)"}
     for r in runs:
         nk = r["attrs"].get("amg.near_kernel")
         if failed(r) or "linear_iterations" not in r["data"] or len(r["data"]["linear_iterations"]) < 2:
@@ -296,6 +298,11 @@ def claim_error_time(S, files, notes, out):
     plot(S, "error_time.py", files["error_time"], os.path.join(out, "error_time.png"))
 
 
+def claim_profiles(S, files, notes, out):
+    import profile_claims  # each claim under the authors' profile and under the true metric
+    profile_claims.claim(S, files, notes)
+
+
 def claim_dual_primal(S, files, notes, out):
     import dual_primal  # the claim's code lives in its own module (this one stays short)
     dual_primal.claim(S, files, notes, out, GROUPS["dual_primal"])
@@ -312,4 +319,4 @@ def plot(S, script, results, out, extra=()):
 
 # Every claim, in the order of summary.md.
 CLAIMS = (claim_squash, claim_scaling, claim_near_kernel, claim_setup_interval, claim_twist, claim_cloth,
-          claim_sweeps, claim_error_time, claim_dual_primal)
+          claim_sweeps, claim_error_time, claim_dual_primal, claim_profiles)

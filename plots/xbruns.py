@@ -110,17 +110,23 @@ def substep_mask(run, frame=None, substep=None):
     return m
 
 
-def to_tolerance(run, tol, frame=0, substep=0):
-    """(outer iterations, seconds) until relative_dual_residual <= tol in one substep; NaNs if never."""
+def to_tolerance(run, tol, frame=0, substep=0, metric="true", after_first=False):
+    """(outer iterations, seconds) until the relative residual of `metric` is <= tol in one substep;
+    NaNs if never (or if the run has no such dataset). after_first: seconds counted from the end of
+    outer iteration 1, i.e. without the setup and the first iteration (the authors' timing)."""
     d = run["data"]
+    key = residual_key(metric, relative=True)
+    if key not in d:
+        return math.nan, math.nan
     m = substep_mask(run, frame, substep)
-    rel = np.asarray(d["relative_dual_residual"])[m]
+    rel = np.asarray(d[key])[m]
     t = np.asarray(d["wall_time"], dtype=float)[m]
     it = np.asarray(d["iteration"])[m]
     hit = np.flatnonzero(rel <= tol)
     if len(hit) == 0:
         return math.nan, math.nan
-    return float(it[hit[0]]), float(t[hit[0]])
+    start = t[np.flatnonzero(it >= 1)[0]] if after_first and np.any(it >= 1) else 0.0
+    return float(it[hit[0]]), float(t[hit[0]] - start)
 
 
 def value_at_iteration(run, key, iteration, frame=0, substep=0):

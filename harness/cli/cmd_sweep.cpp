@@ -179,12 +179,12 @@ void print_summary(const SweepSpec& spec, const std::vector<SweepJob>& jobs, con
 }  // namespace
 
 int cmd_sweep(const CommandArgs& argv) {
-  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}}, 1);
+  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}, {"--profile"}}, 1);
   if (args.positional().empty())
-    throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--time-budget S])");
+    throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--profile NAME|FILE] [--time-budget S])");
   const std::string out = args.require("--out");
   // The whole spec and every combination are checked before anything runs.
-  SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"));
+  SweepSpec spec = parse_sweep_spec(args.positional()[0], args.get("--size", "default"), args.get("--profile", ""));
   if (args.has("--time-budget")) spec.time_budget = time_budget_flag(args, "sweep");
   const std::vector<SweepJob> jobs = expand_sweep(spec);
   const std::string base = sweep_base_hash(spec);

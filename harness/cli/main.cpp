@@ -26,7 +26,7 @@ const Command commands[] = {
     {"run", xb::cmd_run,
      "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--reference] [--save-state FILE --frame-of-state F] [--load-state FILE] --out FILE.h5"},
     {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
-    {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--time-budget S]   (resumes: skips runs already in FILE)"},
+    {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--size NAME] [--profile NAME|FILE] [--time-budget S]   (resumes: skips runs already in FILE)"},
     {"capture", xb::cmd_capture,
      "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] [--time-budget S] --out PREFIX"},
     {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5"},

@@ -2,6 +2,7 @@
 
 #include "args.hpp"
 #include "report.hpp"
+#include "profile.hpp"
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 
@@ -26,7 +27,7 @@ namespace xb {
 namespace {
 
 const std::vector<std::string> top_keys = {"scene", "solvers", "frames", "repeats", "time_budget", "reference",
-                                           "description", "set", "grid"};
+                                           "description", "profile", "set", "grid"};
 
 std::string join(const std::vector<std::string>& v, const std::string& sep = ", ") {
   std::string s;
@@ -64,6 +65,7 @@ std::string fnv1a_hex(const std::string& s) {
 Params base_params(const SweepSpec& spec) {
   Params p;
   load_scene_file(spec.scene, p);
+  if (!spec.profile.empty()) apply_profile(spec.profile, p);
   for (const auto& kv : spec.sets) apply_set(p, kv);
   return p;
 }
@@ -156,7 +158,7 @@ void add_sets_and_grid(SweepSpec& spec, const std::string& frames, int frames_li
 }
 }  // namespace
 
-SweepSpec parse_sweep_spec(const std::string& path, const std::string& size) {
+SweepSpec parse_sweep_spec(const std::string& path, const std::string& size, const std::string& profile) {
   SweepSpec spec;
   spec.path = path;
   spec.size = size;
@@ -209,8 +211,16 @@ SweepSpec parse_sweep_spec(const std::string& path, const std::string& size) {
       else throw Error(where(e) + ": 'reference' must be true or false");
     } else if (e.key == "description") {
       spec.description = scalar(e);
+    } else if (e.key == "profile") {
+      spec.profile = scalar(e);
+      try {
+        resolve_profile(spec.profile);
+      } catch (const Error& err) {
+        throw Error(where(e) + ": " + err.what());
+      }
     }
   }
+  if (!profile.empty()) spec.profile = profile;
   if (spec.scene.empty()) throw Error(path + ": missing 'scene' (a built-in scene name or a .toml file)");
   if (!have_solvers) throw Error(path + ": missing 'solvers' (a list of solver names)");
   add_sets_and_grid(spec, frames, frames_line, sets, grids);
@@ -224,6 +234,10 @@ std::string sweep_base_hash(const SweepSpec& spec) {
   std::ifstream in(spec.scene, std::ios::binary);
   std::ostringstream text;
   text << "scene_file=" << in.rdbuf() << "\n";
+  if (!spec.profile.empty()) {
+    std::ifstream prof(resolve_profile(spec.profile), std::ios::binary);
+    text << "profile_file=" << prof.rdbuf() << "\n";
+  }
   const Params p = base_params(spec);
   std::vector<std::string> fixed;
   for (const auto& kv : spec.sets) {

@@ -9,6 +9,7 @@
 //   time_budget = 3600                  # optional, s per run (0 = none; default 3600)
 //   reference = false                   # optional, per-substep reference + position_error
 //   description = "..."                 # optional, free text
+//   profile = "authors"                 # optional, as run --profile (sweep --profile replaces it)
 //   [set]                               # fixed overrides, as with --set
 //   max_iterations = 50
 //   [grid]                              # the cartesian product of these lists
@@ -37,6 +38,7 @@ struct SweepSpec {
   double time_budget = default_time_budget;
   bool reference = false;
   std::string description;
+  std::string profile;                 // "" = none; applied after the scene, before [set] and [grid]
   std::vector<std::string> sets;       // "key=value", in order (frames first if given)
   // Grid axes in spec order: key and its values (as written; canonicalised in the jobs).
   std::vector<std::pair<std::string, std::vector<std::string>>> grid;
@@ -56,14 +58,16 @@ struct SweepJob {
 // Reads and validates the whole spec at one size: unknown keys, bad values, unknown or
 // unavailable solvers, empty lists, duplicate grid values, an unknown size. Throws xb::Error with
 // one line naming file:line and key.
-SweepSpec parse_sweep_spec(const std::string& path, const std::string& size = "default");
+// `profile` (sweep --profile; "" = the spec's own) replaces the spec's profile.
+SweepSpec parse_sweep_spec(const std::string& path, const std::string& size = "default",
+                           const std::string& profile = "");
 
 // All jobs, grid point major, then solver, then repeat. Every job's Params are resolved and
 // validated here, so a bad combination fails before anything runs.
 std::vector<SweepJob> expand_sweep(const SweepSpec& spec);
 
-// A hash (hex) of what a sweep's runs share: the scene file's text, the fixed overrides ([set],
-// frames; values canonical) and the reference flag. Runs of one sweep carry it as `sweep_base`.
+// A hash (hex) of what a sweep's runs share: the scene file's text, the profile file's text, the
+// fixed overrides ([set], frames; values canonical) and the reference flag. Runs of one sweep carry it as `sweep_base`.
 std::string sweep_base_hash(const SweepSpec& spec);
 
 // A parameter value as short canonical text (doubles as %.15g).

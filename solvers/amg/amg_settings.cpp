@@ -7,7 +7,7 @@ const SettingTable<AmgSettings>& amg_settings() {
   static const SettingTable<S> table = {
       setting("amg.strength_threshold", "theta_s: keep |Aij| >= theta sqrt(|Aii Ajj|)", &S::strength_threshold, 0, 1),
       setting("amg.aggregation", "aggregation rule", &S::aggregation, {"standard"}),
-      setting("amg.near_kernel", "near-kernel candidates: auto (ones dual, rigid primal) | ones | gs | rigid (6 rigid-body modes, primal form only)", &S::near_kernel, {"auto", "ones", "gs", "rigid"}),
+      setting("amg.near_kernel", "near-kernel candidates: auto (ones dual, rigid primal) | ones | gs | gs_authors (6 vectors of 30 sequential forward GS sweeps from U[0,1) max|A|, smoothed P under prolongator=auto) | rigid (6 rigid-body modes, primal form only)", &S::near_kernel, {"auto", "ones", "gs", "gs_authors", "rigid"}),
       setting("amg.near_kernel_sweeps", "Gauss-Seidel sweeps on Ax=0 for near_kernel=gs", &S::near_kernel_sweeps, 0, 1e6),
       setting("amg.near_kernel_vectors", "number of gs candidate vectors", &S::near_kernel_vectors, 1, 64),
       setting("amg.prolongator", "auto (tentative dual, smoothed primal) | tentative | smoothed: P = (I - omega D^-1 A) T, omega = 4/(3 lambda_max(D^-1 A))", &S::prolongator, {"auto", "tentative", "smoothed"}),
@@ -16,6 +16,8 @@ const SettingTable<AmgSettings>& amg_settings() {
       setting("amg.prolongator_diagonal", "D of the smoothed prolongator: scalar (A's diagonal) | block (node blocks)", &S::prolongator_diagonal, {"scalar", "block"}),
       setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &S::smoother, {"auto", "jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"}),
       setting("amg.smoother_sweeps", "pre- and post-smoothing sweeps (0 = auto: 1 dual, 2 primal)", &S::smoother_sweeps, 0, 100),
+      setting("amg.coarse_solver", "coarsest level: direct (Cholesky) | smoother (the level's smoother sweeps from zero, the authors')", &S::coarse_solver, {"direct", "smoother"}),
+      setting("amg.jacobi_omega", "lambda_max(D^-1 A) of jacobi/chebyshev smoothers: per_level (each level's own) | level0 (level 0's on every level, the authors')", &S::jacobi_omega, {"per_level", "level0"}),
       setting("amg.setup_interval", "frames between rebuilds of aggregates and P", &S::setup_interval, 1, 1e9),
       setting("amg.max_coarse", "stop coarsening at this many rows", &S::max_coarse, 1, 1e9),
       setting("amg.max_levels", "maximum number of levels", &S::max_levels, 1, 64),

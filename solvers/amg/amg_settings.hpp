@@ -11,7 +11,9 @@ namespace xb {
 struct AmgSettings {
   double strength_threshold = 0.25;
   std::string aggregation = "standard";
-  std::string near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | rigid
+  std::string near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | gs_authors | rigid
+  std::string coarse_solver = "direct";   // direct (Cholesky) | smoother (the level's smoother from zero)
+  std::string jacobi_omega = "per_level";  // per_level | level0 (lambda_max of level 0 on every level)
   int near_kernel_sweeps = 20;
   int near_kernel_vectors = 1;
   std::string prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed

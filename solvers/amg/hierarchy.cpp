@@ -25,14 +25,20 @@ AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   o.smoother.seed = static_cast<unsigned>(p.seed);
   o.max_coarse = p.amg.max_coarse;
   o.max_levels = p.amg.max_levels;
+  o.coarse_solver = p.amg.coarse_solver;
+  o.jacobi_omega = p.amg.jacobi_omega;
   return o;
 }
 
 void check_option_names(const AmgOptions& opt) {
   aggregation_rule(opt.aggregation);
   const std::string& nk = opt.near_kernel.kind;
-  if (nk != "auto" && nk != "ones" && nk != "gs" && nk != "rigid")
-    throw Error("amg.near_kernel: unknown kind '" + nk + "' (valid: auto, ones, gs, rigid)");
+  if (nk != "auto" && nk != "ones" && nk != "gs" && nk != "gs_authors" && nk != "rigid")
+    throw Error("amg.near_kernel: unknown kind '" + nk + "' (valid: auto, ones, gs, gs_authors, rigid)");
+  if (opt.coarse_solver != "direct" && opt.coarse_solver != "smoother")
+    throw Error("amg.coarse_solver: unknown solver '" + opt.coarse_solver + "' (valid: direct, smoother)");
+  if (opt.jacobi_omega != "per_level" && opt.jacobi_omega != "level0")
+    throw Error("amg.jacobi_omega: unknown rule '" + opt.jacobi_omega + "' (valid: per_level, level0)");
   if (opt.prolongator != "auto" && opt.prolongator != "tentative" && opt.prolongator != "smoothed")
     throw Error("amg.prolongator: unknown kind '" + opt.prolongator + "' (valid: auto, tentative, smoothed)");
   const std::string& sm = opt.smoother.kind;
@@ -50,8 +56,10 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
   if (o.near_kernel.kind == "auto") o.near_kernel.kind = block && info.near_kernel ? "rigid" : "ones";
   if (o.near_kernel.kind == "rigid" && !info.near_kernel)
     throw Error("amg.near_kernel=rigid needs the rigid-body modes of the primal form (form=primal); this system has none");
-  if (o.prolongator == "auto") o.prolongator = block ? "smoothed" : "tentative";
+  if (o.prolongator == "auto") o.prolongator = block || o.near_kernel.kind == "gs_authors" ? "smoothed" : "tentative";
   if (o.smoother.kind == "auto") o.smoother.kind = block ? kBlockSmoother : "chebyshev";
+  if (o.jacobi_omega == "level0" && o.smoother.kind != "jacobi" && o.smoother.kind != "chebyshev")
+    throw Error("amg.jacobi_omega=level0 needs amg.smoother jacobi or chebyshev (the smoother is " + o.smoother.kind + ")");
   if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
   return o;
 }
@@ -72,7 +80,16 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   info_.near_kernel = nullptr;  // valid during setup only
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
+  if (opt_.coarse_solver == "smoother") levels_.back().smoother = make_smoother(opt_.smoother, *levels_.back().A, levels_.back().nodes);
   factor_coarsest();
+  share_level0_lambda();
+}
+
+void Hierarchy::share_level0_lambda() {
+  if (opt_.jacobi_omega != "level0" || !levels_[0].smoother) return;
+  const double lambda0 = levels_[0].smoother->lambda_max();
+  for (size_t l = 1; l < levels_.size(); ++l)
+    if (levels_[l].smoother) levels_[l].smoother->set_lambda_max(lambda0);
 }
 
 bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
@@ -133,10 +150,13 @@ void Hierarchy::refresh(const SparseMatrix& A) {
       L.product.refresh(L.T.R, *L.A, L.T.P, next.A_own);
     L.smoother->refresh(*L.A);
   }
+  if (levels_.back().smoother) levels_.back().smoother->refresh(*levels_.back().A);
   factor_coarsest();
+  share_level0_lambda();
 }
 
 void Hierarchy::factor_coarsest() {
+  if (opt_.coarse_solver == "smoother") return;
   const SparseMatrix& Ac = *levels_.back().A;
   const int n = static_cast<int>(Ac.rows());
   dense_coarse_ = n <= kDenseCoarseLimit;
@@ -153,7 +173,12 @@ void Hierarchy::factor_coarsest() {
 }
 
 void Hierarchy::coarse_solve(const Vector& b, Vector& x) {
-  if (dense_coarse_)
+  if (opt_.coarse_solver == "smoother") {
+    Level& C = levels_.back();
+    x.resize(b.size());
+    C.smoother->presmooth(*C.A, b, x, true);
+    if (!C.smoother->symmetric_from_zero()) C.smoother->postsmooth(*C.A, b, x);
+  } else if (dense_coarse_)
     x = dense_llt_.solve(b);
   else
     x = sparse_ldlt_.solve(b);

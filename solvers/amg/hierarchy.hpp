@@ -5,7 +5,10 @@
 // (nodal.hpp) on every level.
 // setup() builds everything; refresh() keeps aggregates and P and recomputes only what depends
 // on A's values (the lazy setup of the paper): A_l by the cached Galerkin pattern, diagonals,
-// spectral bounds, the coarse factorisation. A smoothed P is kept too: it was built from the
+// spectral bounds, the coarse factorisation. The authors' variants: coarse_solver = smoother (the
+// coarsest level gets its smoother's sweeps from zero instead of a Cholesky solve) and
+// jacobi_omega = level0 (jacobi/chebyshev use level 0's λ_max(D⁻¹A) on every level; a smoothed
+// P still uses its level's own). A smoothed P is kept too: it was built from the
 // setup's values, which changes the preconditioner, not its correctness.
 #pragma once
 
@@ -49,9 +52,12 @@ struct AmgOptions {
   SmootherOptions smoother;
   int max_coarse = 400;
   int max_levels = 10;
+  std::string coarse_solver = "direct";   // direct | smoother
+  std::string jacobi_omega = "per_level";  // per_level | level0
   // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
   // amg.coarse_nodal_strength_threshold, amg.aggregation, amg.near_kernel*, amg.prolongator,
-  // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, seed).
+  // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, amg.coarse_solver,
+  // amg.jacobi_omega, seed).
   static AmgOptions from_settings(const SolverSettings& p);
 };
 
@@ -70,10 +76,12 @@ struct MatrixInfo {
 };
 
 // Throws xb::Error naming the amg.* key of an unknown aggregation, near-kernel, prolongator or
-// smoother name (the check a solver makes when it is created).
+// smoother name, coarse solver or omega rule (the check a solver makes when it is created).
 void check_option_names(const AmgOptions& opt);
-// The options with "auto" resolved for this matrix; throws xb::Error for unknown names and for
-// near_kernel = rigid without a basis.
+// The options with "auto" resolved for this matrix (near_kernel = gs_authors makes an auto
+// prolongator smoothed, as the authors hand their candidates to smoothed aggregation); throws
+// xb::Error for unknown names, near_kernel = rigid without a basis and jacobi_omega = level0 with
+// a smoother other than jacobi or chebyshev.
 AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info);
 
 struct Level {
@@ -115,6 +123,8 @@ class Hierarchy {
   bool coarsen(Eigen::MatrixXd& B);
   void factor_coarsest();
   void coarse_solve(const Vector& b, Vector& x);
+  // jacobi_omega = level0: level 0's λ_max on every coarser level's smoother.
+  void share_level0_lambda();
 
   AmgOptions opt_;  // resolved
   MatrixInfo info_;

@@ -33,7 +33,8 @@ Eigen::MatrixXd near_kernel_candidates(const SparseMatrix& A, const NearKernelOp
     B << *given, relaxed_random_vectors(A, opt.extra, opt.sweeps, opt.seed, coloring);
     return B;
   }
-  if (opt.kind != "gs") throw Error("amg.near_kernel: unknown kind '" + opt.kind + "' (valid: auto, ones, gs, rigid)");
+  if (opt.kind == "gs_authors") return gs_authors_vectors(A, opt.seed);
+  if (opt.kind != "gs") throw Error("amg.near_kernel: unknown kind '" + opt.kind + "' (valid: auto, ones, gs, gs_authors, rigid)");
   if (opt.vectors < 1) throw Error("amg.near_kernel_vectors must be >= 1");
   return relaxed_random_vectors(A, opt.vectors, opt.sweeps, opt.seed, coloring);
 }
@@ -64,6 +65,35 @@ Eigen::MatrixXd relaxed_random_vectors(const SparseMatrix& A, int count, int swe
     }
     const double nx = norm2(x);
     if (!(nx > 0) || !std::isfinite(nx)) throw Error("amg.near_kernel: a relaxed candidate vanished or is not finite");
+    B.col(v) = x / nx;
+  }
+  return B;
+}
+
+Eigen::MatrixXd gs_authors_vectors(const SparseMatrix& A, unsigned seed) {
+  const long n = A.rows();
+  const int* outer = A.outerIndexPtr();
+  const int* cols = A.innerIndexPtr();
+  const double* val = A.valuePtr();
+  const Vector inv_diag = inverse_diagonal(A);
+  const double max_abs = A.nonZeros() > 0 ? Eigen::Map<const Vector>(val, A.nonZeros()).cwiseAbs().maxCoeff() : 1.0;
+  Eigen::MatrixXd B(n, kGsAuthorsVectors);
+  for (int v = 0; v < kGsAuthorsVectors; ++v) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed) * 1000003ull + static_cast<std::uint64_t>(v));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Vector x(n);
+    for (long i = 0; i < n; ++i) x[i] = u(rng) * max_abs;
+    for (int s = 0; s < kGsAuthorsSweeps; ++s) {
+      for (long i = 0; i < n; ++i) {  // sequential: row i sees rows < i of this sweep
+        double r = 0;
+        for (int k = outer[i]; k < outer[i + 1]; ++k) r -= val[k] * x[cols[k]];
+        x[i] += inv_diag[i] * r;
+      }
+      const double nx = norm2(x);  // the direction is what counts: keep the scale from underflow
+      if (nx > 0) x /= nx;
+    }
+    const double nx = norm2(x);
+    if (!(nx > 0) || !std::isfinite(nx)) throw Error("amg.near_kernel=gs_authors: a relaxed candidate vanished or is not finite");
     B.col(v) = x / nx;
   }
   return B;

@@ -5,6 +5,8 @@
 //        vectors appended.
 //  gs:   the paper's: `sweeps` multicolour Gauss–Seidel sweeps on A x = 0 from a random start
 //        (seeded, so a setup is reproducible), `vectors` of them; each column scaled to unit norm.
+//  gs_authors: the authors' recipe, whatever sweeps/vectors say: 6 vectors, each 30 sequential
+//        forward Gauss–Seidel sweeps (row order, as pyamg's) on A x = 0 from U[0,1)·max|A|.
 #pragma once
 
 #include "../../core/sparse.hpp"
@@ -16,7 +18,7 @@
 namespace xb::amg {
 
 struct NearKernelOptions {
-  std::string kind = "ones";  // ones | gs | rigid (auto is resolved by the hierarchy)
+  std::string kind = "ones";  // ones | gs | gs_authors | rigid (auto is resolved by the hierarchy)
   int sweeps = 20;
   int vectors = 1;
   int extra = 0;  // rigid: this many relaxed random vectors appended to the caller's basis
@@ -34,5 +36,10 @@ Eigen::MatrixXd near_kernel_candidates(const SparseMatrix& A, const NearKernelOp
 // random start, scaled to unit norm (the gs candidates).
 Eigen::MatrixXd relaxed_random_vectors(const SparseMatrix& A, int count, int sweeps, unsigned seed,
                                        const Coloring* coloring = nullptr);
+
+// The gs_authors candidates (kGsAuthorsVectors × kGsAuthorsSweeps), each scaled to unit norm.
+inline constexpr int kGsAuthorsVectors = 6;
+inline constexpr int kGsAuthorsSweeps = 30;
+Eigen::MatrixXd gs_authors_vectors(const SparseMatrix& A, unsigned seed);
 
 }  // namespace xb::amg

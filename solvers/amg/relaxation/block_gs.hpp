@@ -26,6 +26,7 @@ class BlockGaussSeidelSmoother final : public Smoother {
   // Throws xb::Error if a diagonal block is not positive definite.
   BlockGaussSeidelSmoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes);
   std::string name() const override { return "block_gs"; }
+  bool symmetric_from_zero() const override { return false; }
   void refresh(const SparseMatrix& A) override { D_.build(A, nodes_); }  // colouring: pattern only
   void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override;
   void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override;

@@ -74,6 +74,10 @@ double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector
   return std::isnan(bound) ? gershgorin : std::min(bound, gershgorin);
 }
 
+void Smoother::set_lambda_max(double) {
+  throw Error("amg.jacobi_omega=level0: smoother '" + name() + "' has no lambda_max(D^-1 A) to share (use jacobi or chebyshev)");
+}
+
 namespace {
 
 class DiagonalSmoother : public Smoother {
@@ -89,6 +93,7 @@ class DiagonalSmoother : public Smoother {
     check(A);
   }
   double lambda_max() const override { return lambda_; }
+  void set_lambda_max(double lambda) override { lambda_ = lambda; }
 
  protected:
   void check(const SparseMatrix& A) {
@@ -163,6 +168,7 @@ class GaussSeidelSmoother final : public Smoother {
   GaussSeidelSmoother(const SmootherOptions& opt, const SparseMatrix& A)
       : opt_(opt), coloring_(greedy_coloring(A)), inv_diag_(inverse_diagonal(A)) {}
   std::string name() const override { return "gs"; }
+  bool symmetric_from_zero() const override { return false; }
   void refresh(const SparseMatrix& A) override { inv_diag_ = inverse_diagonal(A); }  // colouring: pattern only
   void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override {
     if (x_zero) x.setZero();

@@ -85,6 +85,12 @@ class Smoother {
   // or the node blocks where block_diagonal() says so.
   virtual double lambda_max() const { return 0; }
   virtual bool block_diagonal() const { return false; }
+  // jacobi and chebyshev: use this λ_max(D⁻¹A) instead of the level's own estimate until the next
+  // refresh (amg.jacobi_omega = level0: level 0's on every level, as the authors do).
+  virtual void set_lambda_max(double lambda);
+  // presmooth from x = 0 is a symmetric operator of b (polynomials in D⁻¹A times D⁻¹); false for
+  // the Gauss–Seidel kinds, whose forward sweeps need the backward ones after them.
+  virtual bool symmetric_from_zero() const { return true; }
 };
 
 struct SmootherOptions {

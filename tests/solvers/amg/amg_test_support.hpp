@@ -5,7 +5,10 @@
 #include "problems/dual_system.hpp"
 #include "harness/params.hpp"
 #include "problems/scene.hpp"
+#include "solvers/amg/hierarchy.hpp"
 #include "solvers/linear_solver.hpp"
+
+#include <gtest/gtest.h>
 
 #include <memory>
 #include <random>
@@ -96,6 +99,20 @@ inline SceneSystem scene_system(const std::string& scene, int resolution, int it
     P.x += dx;
   }
   return s;
+}
+
+// ⟨Mx, y⟩ vs ⟨x, My⟩ and ⟨Mx, x⟩ > 0 for the V-cycle operator M.
+inline void check_vcycle_spd(amg::Hierarchy& h, int trials, const std::string& what) {
+  const long n = h.matrix(0).rows();
+  for (int t = 0; t < trials; ++t) {
+    const Vector x = random_vector(n, 100 + 2 * t), y = random_vector(n, 101 + 2 * t);
+    Vector Mx, My;
+    h.vcycle(x, Mx);
+    h.vcycle(y, My);
+    EXPECT_LE(std::abs(Mx.dot(y) - x.dot(My)), 1e-10 * x.norm() * y.norm()) << what;
+    EXPECT_GT(Mx.dot(x), 0) << what;
+    EXPECT_GT(My.dot(y), 0) << what;
+  }
 }
 
 inline double rel_diff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }

@@ -157,22 +157,6 @@ TEST(AmgGalerkin, AggregateSumEqualsGeneralAndDenseProducts) {
   EXPECT_THROW(g2.build(A, T2.P, T2.R, dummy), Error);
 }
 
-namespace {
-// ⟨Mx, y⟩ vs ⟨x, My⟩ and ⟨Mx, x⟩ > 0 for the V-cycle operator M.
-void check_vcycle_spd(Hierarchy& h, int trials, const std::string& what) {
-  const long n = h.matrix(0).rows();
-  for (int t = 0; t < trials; ++t) {
-    const Vector x = random_vector(n, 100 + 2 * t), y = random_vector(n, 101 + 2 * t);
-    Vector Mx, My;
-    h.vcycle(x, Mx);
-    h.vcycle(y, My);
-    EXPECT_LE(std::abs(Mx.dot(y) - x.dot(My)), 1e-10 * x.norm() * y.norm()) << what;
-    EXPECT_GT(Mx.dot(x), 0) << what;
-    EXPECT_GT(My.dot(y), 0) << what;
-  }
-}
-}  // namespace
-
 TEST(AmgVcycle, SymmetricPositiveDefiniteForEverySmoother) {
   SceneSystem cloth = scene_system("cloth_hang", 24, 0);
   SceneSystem bar = scene_system("bar_hang", 3, 1);
