@@ -61,6 +61,7 @@ std::vector<ParamField> make_fields() {
       {"amg.setup_interval", T::Int, "frames between rebuilds of aggregates and P", &Params::amg_setup_interval, 1, 1e9, {}},
       {"amg.max_coarse", T::Int, "stop coarsening at this many rows", &Params::amg_max_coarse, 1, 1e9, {}},
       {"amg.max_levels", T::Int, "maximum number of levels", &Params::amg_max_levels, 1, 64, {}},
+      {"amg.precision", T::String, "storage of the V-cycle's matrices and vectors: double | single (float, as the authors ran; CG and the coarsest solve stay double; polynomial smoothers only)", &Params::amg_precision, 0, 0, {"double", "single"}},
       {"hypre.coarsening", T::String, "BoomerAMG coarsening", &Params::hypre_coarsening, 0, 0, {"HMIS", "PMIS", "Falgout"}},
       {"hypre.interpolation", T::String, "BoomerAMG interpolation", &Params::hypre_interpolation, 0, 0, {"ext+i", "classical", "direct", "multipass"}},
       {"hypre.relaxation", T::String, "BoomerAMG relaxation", &Params::hypre_relaxation, 0, 0, {"l1-jacobi", "jacobi", "hgs", "l1-gs", "chebyshev"}},

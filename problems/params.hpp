@@ -65,6 +65,7 @@ struct Params {
   int amg_setup_interval = 20;       // frames between rebuilds of aggregates and P
   int amg_max_coarse = 400;
   int amg_max_levels = 10;
+  std::string amg_precision = "double";  // storage of the V-cycle: double | single (float matrices and vectors; CG stays double)
   // --- hypre BoomerAMG ---
   std::string hypre_coarsening = "HMIS";    // HMIS | PMIS | Falgout
   std::string hypre_interpolation = "ext+i";  // ext+i | classical | direct | multipass

@@ -25,6 +25,7 @@ AmgOptions AmgOptions::from_params(const Params& p) {
   o.smoother.seed = static_cast<unsigned>(p.seed);
   o.max_coarse = p.amg_max_coarse;
   o.max_levels = p.amg_max_levels;
+  o.precision = p.amg_precision;
   return o;
 }
 
@@ -39,6 +40,8 @@ void check_option_names(const AmgOptions& opt) {
   const std::string kinds = std::string(", ") + kSmootherKinds + ",";
   if (sm != "auto" && (sm.empty() || kinds.find(", " + sm + ",") == std::string::npos))
     throw Error("amg.smoother: unknown smoother '" + sm + "' (valid: auto, " + kSmootherKinds + ")");
+  if (opt.precision != "double" && opt.precision != "single")
+    throw Error("amg.precision: unknown precision '" + opt.precision + "' (valid: double, single)");
 }
 
 AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
@@ -53,6 +56,9 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
   if (o.prolongator == "auto") o.prolongator = block ? "smoothed" : "tentative";
   if (o.smoother.kind == "auto") o.smoother.kind = block ? kBlockSmoother : "chebyshev";
   if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
+  if (o.precision == "single" && (o.smoother.kind == "gs" || o.smoother.kind == "block_gs"))
+    throw Error("amg.precision=single runs the polynomial smoothers (jacobi, chebyshev, block_jacobi, block_chebyshev), not amg.smoother=" +
+                o.smoother.kind);
   return o;
 }
 
@@ -73,6 +79,7 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
   factor_coarsest();
+  if (opt_.precision == "single") make_single();
 }
 
 bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
@@ -134,6 +141,7 @@ void Hierarchy::refresh(const SparseMatrix& A) {
     L.smoother->refresh(*L.A);
   }
   factor_coarsest();
+  if (opt_.precision == "single") make_single();
 }
 
 void Hierarchy::factor_coarsest() {

@@ -49,9 +49,12 @@ struct AmgOptions {
   SmootherOptions smoother;
   int max_coarse = 400;
   int max_levels = 10;
+  // Storage of the V-cycle: "double", or "single" (float copies of every level's A, P, R and of
+  // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
+  std::string precision = "double";
   // The amg.* keys of a Params (amg.strength_threshold, amg.nodal_strength_threshold,
   // amg.coarse_nodal_strength_threshold, amg.aggregation, amg.near_kernel*, amg.prolongator,
-  // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, seed).
+  // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, amg.precision, seed).
   static AmgOptions from_params(const Params& p);
 };
 
@@ -76,6 +79,13 @@ void check_option_names(const AmgOptions& opt);
 // near_kernel = rigid without a basis.
 AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info);
 
+// A level in single precision (amg.precision = single).
+struct SingleLevel {
+  CsrOf<float> A, P, R;
+  DiagonalRelaxation<float> relax;
+  VectorOf<float> x, b, r;  // V-cycle work vectors
+};
+
 struct Level {
   const SparseMatrix* A = nullptr;  // level 0: the caller's matrix; coarser: &A_own
   SparseMatrix A_own;
@@ -87,6 +97,7 @@ struct Level {
   GalerkinProduct product;          // otherwise: the general product with its cached pattern
   std::unique_ptr<Smoother> smoother;
   Vector x, b, r;                   // V-cycle work vectors
+  SingleLevel single;               // amg.precision = single only
 };
 
 class Hierarchy {
@@ -114,6 +125,10 @@ class Hierarchy {
   // Builds level l+1 from level l; false when level l cannot be coarsened (it stays coarsest).
   bool coarsen(Eigen::MatrixXd& B);
   void factor_coarsest();
+  // amg.precision = single: the float copies of the levels (after setup and refresh) and the
+  // V-cycle on them (vcycle.cpp).
+  void make_single();
+  void vcycle_single(const Vector& b, Vector& x);
   void coarse_solve(const Vector& b, Vector& x);
 
   AmgOptions opt_;  // resolved
