@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <functional>
 #include <memory>
@@ -21,18 +22,28 @@ namespace xb::bench {
 
 namespace {
 
-// Median wall time of f in ms: one warm-up call, then at least 3 calls and until budget_s.
-double median_ms(const std::function<void()>& f, double budget_s) {
+// The clock of every measurement: wall time, or the process's CPU time (every thread's; with a
+// passive wait policy idle threads sleep, so it is the work done), which a loaded machine
+// disturbs far less.
+bool cpu_clock = false;
+double now_s() {
+  timespec ts;
+  clock_gettime(cpu_clock ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Least time of f in ms (the call least disturbed by other load): one warm-up call, then at
+// least 3 calls and until budget_s (wall).
+double least_ms(const std::function<void()>& f, double budget_s) {
   f();
   std::vector<double> t;
   Timer total;
   while (t.size() < 3 || (total.seconds() < budget_s && t.size() < 200)) {
-    Timer c;
+    const double t0 = now_s();
     f();
-    t.push_back(c.seconds() * 1e3);
+    t.push_back((now_s() - t0) * 1e3);
   }
-  std::nth_element(t.begin(), t.begin() + t.size() / 2, t.end());
-  return t[t.size() / 2];
+  return *std::min_element(t.begin(), t.end());
 }
 
 // Triad a = b + s·c: bytes per second over 3 streams of n doubles.
@@ -41,7 +52,7 @@ double triad_bandwidth(double budget_s) {
   std::vector<double> a(n), b(n), c(n);
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) a[i] = 0, b[i] = 1.0 + i % 7, c[i] = 2.0 - i % 5;
-  const double ms = median_ms(
+  const double ms = least_ms(
       [&] {
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) a[i] = b[i] + 3.0 * c[i];
@@ -67,7 +78,7 @@ struct Table {
 // SpMV with A, double and float storage, against the floor 12·nnz + 16·rows (float: 8·nnz + 8·rows).
 void spmv_rows(Table& t, const std::string& form, const SparseMatrix& A, double bandwidth, double budget) {
   Vector x = Vector::Ones(A.rows()), y;
-  t.spmv_ms = median_ms([&] { spmv(A, x, y); }, budget);
+  t.spmv_ms = least_ms([&] { spmv(A, x, y); }, budget);
   const double nnz = static_cast<double>(A.nonZeros()), rows = static_cast<double>(A.rows());
   const double floor_ms = (12 * nnz + 16 * rows) / bandwidth * 1e3;
   char note[96];
@@ -76,7 +87,7 @@ void spmv_rows(Table& t, const std::string& form, const SparseMatrix& A, double 
   // The V-cycle's single-precision storage: the same product on float values.
   amg::CsrOf<float> Af = A.cast<float>();
   amg::VectorOf<float> xf = amg::VectorOf<float>::Ones(A.rows()), yf(A.rows());
-  const double f_ms = median_ms(
+  const double f_ms = least_ms(
       [&] {
         const int n = static_cast<int>(Af.rows());
         const int *o = Af.outerIndexPtr(), *c = Af.innerIndexPtr();
@@ -94,6 +105,15 @@ void spmv_rows(Table& t, const std::string& form, const SparseMatrix& A, double 
   t.add(form, "spmv (float)", f_ms, note);
 }
 
+// One PCG iteration: capped solves' time over their iterations.
+void pcg_iteration_row(Table& t, const std::string& form, const std::string& kernel, LinearSolver& s, const Vector& b,
+                       double budget) {
+  Vector x;
+  int its = 0;
+  const double ms = least_ms([&] { its = s.solve(b, x).iterations; }, budget);
+  if (its > 0) t.add(form, kernel, ms / its);
+}
+
 // Setup, refresh, V-cycle of the hierarchy on A and one PCG iteration of mgpbd, per precision.
 void amg_rows(Table& t, const std::string& form, const SparseMatrix& A, const Vector& b, Params p,
               const amg::MatrixInfo& info, double budget) {
@@ -102,24 +122,20 @@ void amg_rows(Table& t, const std::string& form, const SparseMatrix& A, const Ve
     const std::string tag = std::string(" (") + precision + ")";
     amg::AmgOptions opt = amg::AmgOptions::from_params(p);
     amg::Hierarchy h;
-    const double setup_ms = median_ms([&] { h.setup(A, opt, info); }, budget);
-    const double refresh_ms = median_ms([&] { h.refresh(A); }, budget);
+    const double setup_ms = least_ms([&] { h.setup(A, opt, info); }, budget);
+    const double refresh_ms = least_ms([&] { h.refresh(A); }, budget);
     Vector x;
-    const double vcycle_ms = median_ms([&] { h.vcycle(b, x); }, budget);
+    const double vcycle_ms = least_ms([&] { h.vcycle(b, x); }, budget);
     if (std::string(precision) == "double") t.add(form, "amg setup", setup_ms);
     t.add(form, "amg refresh" + tag, refresh_ms);
     t.add(form, "V-cycle" + tag, vcycle_ms, "smoother " + h.options().smoother.kind);
-    // One PCG iteration: a capped solve's time over its iterations.
     auto s = make_linear_solver("mgpbd", p);
     s->setup(A, SetupKind::Structure, SetupContext{0, 0, 0, info.block_size, info.near_kernel});
-    const LinearStats st = s->solve(b, x);
-    if (st.iterations > 0) t.add(form, "mgpbd PCG iteration" + tag, st.solve_time * 1e3 / st.iterations);
+    pcg_iteration_row(t, form, "mgpbd PCG iteration" + tag, *s, b, budget);
   }
   auto j = make_linear_solver("jacobi-pcg", p);
   j->setup(A, SetupKind::Structure, SetupContext{});
-  Vector x;
-  const LinearStats st = j->solve(b, x);
-  if (st.iterations > 0) t.add(form, "jacobi-pcg iteration", st.solve_time * 1e3 / st.iterations);
+  pcg_iteration_row(t, form, "jacobi-pcg iteration", *j, b, budget);
 }
 
 // A's fill from the captured gradients (the problem rebuilt from the file's parameters for A's pattern).
@@ -133,7 +149,7 @@ void dual_fill_row(Table& t, const CapturedSystem& cs, const Params& p, double b
     }
     ConstraintState state;
     state.grad = cs.grad;
-    t.add("dual", "fill A", median_ms([&] { ds.fill(state, cs.alpha_tilde); }, budget));
+    t.add("dual", "fill A", least_ms([&] { ds.fill(state, cs.alpha_tilde); }, budget));
   } catch (const std::exception& e) {
     t.add("dual", "fill A", NAN, std::string("skipped: ") + e.what());
   }
@@ -141,7 +157,8 @@ void dual_fill_row(Table& t, const CapturedSystem& cs, const Params& p, double b
 
 void write_json(const Table& t, const std::string& path, double bandwidth) {
   std::ofstream f(path);
-  f << "{\"triad_bytes_per_s\": " << bandwidth << ", \"threads\": " << omp_get_max_threads() << ", \"rows\": [";
+  f << "{\"triad_bytes_per_s\": " << bandwidth << ", \"clock\": \"" << (cpu_clock ? "cpu" : "wall")
+    << "\", \"threads\": " << omp_get_max_threads() << ", \"rows\": [";
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const Row& r = t.rows[i];
     f << (i ? ",\n " : "\n ") << "{\"form\": \"" << r.form << "\", \"kernel\": \"" << r.kernel << "\", \"ms\": "
@@ -152,9 +169,10 @@ void write_json(const Table& t, const std::string& path, double bandwidth) {
 
 }  // namespace
 
-void kernel_units(const CapturedSystem& cs, const Params& p0, double budget, const std::string& json_path) {
+void kernel_units(const CapturedSystem& cs, const Params& p0, double budget, const std::string& json_path, bool cpu) {
+  cpu_clock = cpu;
   Params p = p0;
-  p.linear_max_iterations = std::min(p.linear_max_iterations, 60);  // iteration cost, not convergence
+  p.linear_max_iterations = std::min(p.linear_max_iterations, 20);  // iteration cost, not convergence
   const double bandwidth = triad_bandwidth(budget);
   Table t;
   spmv_rows(t, "dual", cs.A, bandwidth, budget);
@@ -167,18 +185,19 @@ void kernel_units(const CapturedSystem& cs, const Params& p0, double budget, con
     ps.rhs(cs.grad, cs.alpha_tilde, cs.b, f);
     const Eigen::MatrixXd B = ps.rigid_modes(cs.x);
     spmv_rows(t, "primal", ps.K(), bandwidth, budget);
-    t.add("primal", "fill K", median_ms([&] { ps.fill(cs.grad, cs.alpha_tilde); }, budget));
+    t.add("primal", "fill K", least_ms([&] { ps.fill(cs.grad, cs.alpha_tilde); }, budget));
     amg_rows(t, "primal", ps.K(), f, p, {3, &B}, budget);
   }
-  std::printf("triad %.2f GB/s, %d threads; SpMV unit = one product with the form's matrix\n\n", bandwidth * 1e-9,
-              omp_get_max_threads());
+  std::printf("triad %.2f GB/s (%s time), %d threads; SpMV unit = one product with the form's matrix\n\n",
+              bandwidth * 1e-9, cpu ? "CPU" : "wall", omp_get_max_threads());
   std::printf("| form | kernel | ms | SpMV units | note |\n|---|---|---|---|---|\n");
   for (const Row& r : t.rows)
     std::printf("| %s | %s | %.3f | %.2f | %s |\n", r.form.c_str(), r.kernel.c_str(), r.ms, r.units, r.note.c_str());
   if (!json_path.empty()) write_json(t, json_path, bandwidth);
 }
 
-void smoother_table(const CapturedSystem& cs, const Params& p, const std::string& label) {
+void smoother_table(const CapturedSystem& cs, const Params& p, const std::string& label, bool cpu) {
+  cpu_clock = cpu;
   std::printf("| system | form | smoother | sweeps | setup s | solve s | iterations | rel. residual | solve s per decade | total s per decade |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string form : {"dual", "primal"}) {
@@ -197,21 +216,25 @@ void smoother_table(const CapturedSystem& cs, const Params& p, const std::string
         try {
           if (form == "dual") {
             auto s = make_linear_solver("mgpbd", q);
-            Timer c;
+            double t0 = now_s();
             s->setup(cs.A, SetupKind::Structure, SetupContext{});
-            setup = c.seconds();
+            setup = now_s() - t0;
             Vector x;
+            t0 = now_s();
             const LinearStats st = s->solve(cs.b, x);
-            solve = st.solve_time, its = st.iterations;
+            solve = now_s() - t0, its = st.iterations;
             Vector r;
             residual(cs.A, x, cs.b, r);
             rel = norm2(r) / norm2(cs.b);
           } else {
             PrimalSolve ps(make_linear_solver("mgpbd", q), cs.graph, q.linear_tol);
+            double t0 = now_s();
             ps.setup(cs.grad, cs.alpha_tilde, cs.x, SetupKind::Structure, SetupContext{});
+            setup = now_s() - t0;
             Vector dl;
+            t0 = now_s();
             const LinearStats st = ps.solve(cs.b, dl);
-            setup = st.setup_time, solve = st.solve_time, its = st.iterations, rel = st.final_relative_residual;
+            solve = now_s() - t0, its = st.iterations, rel = st.final_relative_residual;
           }
         } catch (const std::exception& e) {
           std::printf("| %s | %s | %s | %d | failed: %s |\n", label.c_str(), form.c_str(), kind.c_str(), sweeps, e.what());

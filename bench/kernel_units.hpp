@@ -13,10 +13,13 @@ namespace xb::bench {
 // Fill of A and K, values-only refresh, setup, V-cycle (double and single storage) and one PCG
 // iteration of mgpbd and jacobi-pcg, per form, in ms and in SpMV units; SpMV against its floor.
 // Prints a Markdown table; writes JSON to json_path unless empty. budget_s: time per kernel.
-void kernel_units(const CapturedSystem& cs, const Params& p, double budget_s, const std::string& json_path);
+// cpu_time: every time (the triad's too) is the process's CPU time instead of wall time.
+void kernel_units(const CapturedSystem& cs, const Params& p, double budget_s, const std::string& json_path,
+                  bool cpu_time);
 
 // For each smoother (dual: jacobi, chebyshev, gs; primal: the same and their block forms), mgpbd
-// setup + solve to p.linear_tol: iterations, time and time per decade of the relative residual.
-void smoother_table(const CapturedSystem& cs, const Params& p, const std::string& label);
+// setup + solve to p.linear_tol: iterations, time and time per decade of the relative residual
+// (cpu_time: the process's CPU time instead of wall time).
+void smoother_table(const CapturedSystem& cs, const Params& p, const std::string& label, bool cpu_time);
 
 }  // namespace xb::bench

@@ -5,7 +5,7 @@
 //
 //   xb_bench [--xb_system=PREFIX.h5] [--xb_scene=NAME] [--xb_set=key=value]... [--xb_frame=F]
 //            [--xb_iteration=I] [--xb_min_rows=N] [--xb_mode=bench|units|smoothers]
-//            [--xb_budget=SECONDS] [--xb_units_json=PATH] [Google Benchmark flags...]
+//            [--xb_budget=SECONDS] [--xb_units_json=PATH] [--xb_clock=wall|cpu] [Google Benchmark flags...]
 // Without --xb_system the system is captured in-process (like `xpbd-bench capture`) from
 // cloth_hang at resolution 160 (77,120 rows), frame 2, outer iteration 1. --xb_set applies to
 // the scene when capturing and to the solvers (e.g. --xb_set=amg.smoother=jacobi, linear.tol=1e-6).
@@ -44,7 +44,7 @@ struct Config {
   std::vector<std::string> sets;
   int frame = 2, iteration = 1;
   long min_rows = 50000;
-  std::string mode = "bench", units_json;
+  std::string mode = "bench", units_json, clock = "wall";
   double budget = 0.5;
 };
 
@@ -173,10 +173,12 @@ void parse_args(int argc, char** argv, Config& c, std::vector<char*>& rest) {
     else if (take(argv[i], "--xb_mode", v)) c.mode = v;
     else if (take(argv[i], "--xb_budget", v)) c.budget = std::stod(v);
     else if (take(argv[i], "--xb_units_json", v)) c.units_json = v;
+    else if (take(argv[i], "--xb_clock", v)) c.clock = v;
     else rest.push_back(argv[i]);
   }
   if (c.mode != "bench" && c.mode != "units" && c.mode != "smoothers")
     throw std::invalid_argument("--xb_mode must be bench, units or smoothers, not '" + c.mode + "'");
+  if (c.clock != "wall" && c.clock != "cpu") throw std::invalid_argument("--xb_clock must be wall or cpu, not '" + c.clock + "'");
 }
 
 }  // namespace
@@ -210,11 +212,11 @@ int main(int argc, char** argv) {
   sys = &s;
   try {
     if (c.mode == "units") {
-      xb::bench::kernel_units(s.cs, s.p, c.budget, c.units_json);
+      xb::bench::kernel_units(s.cs, s.p, c.budget, c.units_json, c.clock == "cpu");
       return 0;
     }
     if (c.mode == "smoothers") {
-      xb::bench::smoother_table(s.cs, s.p, std::filesystem::path(s.label).stem().string());
+      xb::bench::smoother_table(s.cs, s.p, std::filesystem::path(s.label).stem().string(), c.clock == "cpu");
       return 0;
     }
   } catch (const std::exception& e) {

@@ -20,18 +20,20 @@ def main(argv=None):
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--tol", default="1e-8", help="linear.tol of every solve")
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="cpu",
+                    help="cpu: the process's CPU time (robust on a loaded machine); wall: elapsed time")
     a = ap.parse_args(argv)
     exe = os.path.join(a.build, "xb_bench")
     if not os.path.exists(exe):
         sys.exit(f"smoother_table: {exe} not found (build it: ninja -C {a.build} xb_bench)")
     env = dict(os.environ, OMP_NUM_THREADS=str(a.threads), OMP_WAIT_POLICY="passive")
     with open("/proc/loadavg") as f:
-        print(f"load average at start: {f.read().split()[0]}; {a.threads} threads; linear.tol {a.tol}\n")
+        print(f"load average at start: {f.read().split()[0]}; {a.threads} threads; {a.clock} time; linear.tol {a.tol}\n")
     header = True
     for path in a.systems:
         if not os.path.exists(path):
             sys.exit(f"smoother_table: no such system file: {path}")
-        r = subprocess.run([exe, f"--xb_system={path}", "--xb_mode=smoothers", "--xb_min_rows=0",
+        r = subprocess.run([exe, f"--xb_system={path}", "--xb_mode=smoothers", "--xb_min_rows=0", f"--xb_clock={a.clock}",
                             f"--xb_set=linear.tol={a.tol}"], env=env, capture_output=True, text=True)
         if r.returncode != 0:
             sys.exit(f"smoother_table: xb_bench failed on {path} (exit {r.returncode}):\n{r.stderr[-2000:]}")
