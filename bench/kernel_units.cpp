@@ -94,9 +94,9 @@ void spmv_rows(Table& t, const std::string& form, const SparseMatrix& A, double 
         const float* v = Af.valuePtr();
 #pragma omp parallel for schedule(static)
         for (int i = 0; i < n; ++i) {
-          double s = 0;
-          for (int k = o[i]; k < o[i + 1]; ++k) s += static_cast<double>(v[k]) * xf[c[k]];
-          yf[i] = static_cast<float>(s);
+          float s = 0;
+          for (int k = o[i]; k < o[i + 1]; ++k) s += v[k] * xf[c[k]];
+          yf[i] = s;
         }
       },
       budget);

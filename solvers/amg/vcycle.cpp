@@ -23,15 +23,15 @@ void residual_restrict(const CsrOf<S>& A, const CsrOf<S>& R, const VectorOf<S>& 
   {
 #pragma omp for schedule(static)
     for (int i = 0; i < n; ++i) {
-      double s = b[i];
-      for (int k = ao[i]; k < ao[i + 1]; ++k) s -= static_cast<double>(av[k]) * x[ac[k]];
-      r[i] = static_cast<S>(s);
+      S s = b[i];
+      for (int k = ao[i]; k < ao[i + 1]; ++k) s -= av[k] * x[ac[k]];
+      r[i] = s;
     }
 #pragma omp for schedule(static)
     for (int c = 0; c < nc; ++c) {
-      double s = 0;
-      for (int k = ro[c]; k < ro[c + 1]; ++k) s += static_cast<double>(rv[k]) * r[rc[k]];
-      bc[c] = static_cast<S>(s);
+      S s = 0;
+      for (int k = ro[c]; k < ro[c + 1]; ++k) s += rv[k] * r[rc[k]];
+      bc[c] = s;
     }
   }
 }
@@ -44,9 +44,9 @@ void prolongate_add(const CsrOf<S>& P, const VectorOf<S>& xc, VectorOf<S>& x) {
   const S* pv = P.valuePtr();
 #pragma omp parallel for schedule(static) if (n > kMinParallelRows)
   for (int i = 0; i < n; ++i) {
-    double s = 0;
-    for (int k = po[i]; k < po[i + 1]; ++k) s += static_cast<double>(pv[k]) * xc[pc[k]];
-    x[i] = static_cast<S>(x[i] + s);
+    S s = 0;
+    for (int k = po[i]; k < po[i + 1]; ++k) s += pv[k] * xc[pc[k]];
+    x[i] += s;
   }
 }
 
