@@ -4,11 +4,14 @@
 // kernels are OpenMP-parallel).
 //
 //   xb_bench [--xb_system=PREFIX.h5] [--xb_scene=NAME] [--xb_set=key=value]... [--xb_frame=F]
-//            [--xb_iteration=I] [--xb_min_rows=N] [Google Benchmark flags...]
+//            [--xb_iteration=I] [--xb_min_rows=N] [--xb_mode=bench|units|smoothers]
+//            [--xb_budget=SECONDS] [--xb_units_json=PATH] [--xb_clock=wall|cpu] [Google Benchmark flags...]
 // Without --xb_system the system is captured in-process (like `xpbd-bench capture`) from
 // cloth_hang at resolution 160 (77,120 rows), frame 2, outer iteration 1. --xb_set applies to
 // the scene when capturing and to the solvers (e.g. --xb_set=amg.smoother=jacobi, linear.tol=1e-6).
-// Not a ctest: it takes minutes.
+// --xb_mode=units: instead of the benchmarks, the kernel table of bench/kernel_units.hpp (fill,
+// refresh, V-cycle, PCG iteration in SpMV units, both forms; --xb_budget seconds per kernel);
+// --xb_mode=smoothers: the smoother cost-per-digit table. Not a ctest: it takes minutes.
 #include "../harness/cli/run_setup.hpp"
 #include "../harness/sim/capture.hpp"
 #include "../harness/io/system_io.hpp"
@@ -16,6 +19,7 @@
 #include "../problems/scene.hpp"
 #include "../solvers/kernels.hpp"
 #include "../solvers/linear_solver.hpp"
+#include "kernel_units.hpp"
 
 #if __has_include("../solvers/amg/hierarchy.hpp")
 #include "../solvers/amg/hierarchy.hpp"
@@ -27,6 +31,7 @@
 
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -39,6 +44,8 @@ struct Config {
   std::vector<std::string> sets;
   int frame = 2, iteration = 1;
   long min_rows = 50000;
+  std::string mode = "bench", units_json, clock = "wall";
+  double budget = 0.5;
 };
 
 struct System {
@@ -46,18 +53,20 @@ struct System {
   xb::Vector b;
   xb::Params p;  // for the solvers
   std::string label;
+  xb::CapturedSystem cs;  // with the primal data where the file has it
 };
 
 System load(const Config& c) {
   System s;
   if (!c.system.empty()) {
     xb::CapturedSystem cs = xb::read_system_h5(c.system);
-    s.A = std::move(cs.A);
-    s.b = std::move(cs.b);
+    s.A = cs.A;
+    s.b = cs.b;
     for (const auto& f : xb::param_fields())
       if (cs.attrs.count(f.key)) xb::set_param(s.p, f.key, xb::attr_text(cs.attrs, f.key), c.system);
     for (const auto& kv : c.sets) xb::apply_set(s.p, kv);
     s.label = c.system;
+    s.cs = std::move(cs);
     return s;
   }
   std::vector<std::string> sets{"resolution=160"};
@@ -65,9 +74,10 @@ System load(const Config& c) {
   s.p = xb::resolve_params(c.scene, sets);
   std::cerr << "xb_bench: capturing " << c.scene << " frame " << c.frame << ", iteration " << c.iteration << " ...\n";
   xb::CapturedSystem cs = xb::capture_system(s.p, "cholmod", c.frame, 0, c.iteration);
-  s.A = std::move(cs.A);
-  s.b = std::move(cs.b);
+  s.A = cs.A;
+  s.b = cs.b;
   s.label = c.scene;
+  s.cs = std::move(cs);
   return s;
 }
 
@@ -150,22 +160,34 @@ bool take(const char* arg, const char* flag, std::string& value) {
   return true;
 }
 
+// Our flags into c, the rest (Google Benchmark's) into rest. Throws for a bad value.
+void parse_args(int argc, char** argv, Config& c, std::vector<char*>& rest) {
+  for (int i = 1; i < argc; ++i) {
+    std::string v;
+    if (take(argv[i], "--xb_system", v)) c.system = v;
+    else if (take(argv[i], "--xb_scene", v)) c.scene = v;
+    else if (take(argv[i], "--xb_set", v)) c.sets.push_back(v);
+    else if (take(argv[i], "--xb_frame", v)) c.frame = std::stoi(v);
+    else if (take(argv[i], "--xb_iteration", v)) c.iteration = std::stoi(v);
+    else if (take(argv[i], "--xb_min_rows", v)) c.min_rows = std::stol(v);
+    else if (take(argv[i], "--xb_mode", v)) c.mode = v;
+    else if (take(argv[i], "--xb_budget", v)) c.budget = std::stod(v);
+    else if (take(argv[i], "--xb_units_json", v)) c.units_json = v;
+    else if (take(argv[i], "--xb_clock", v)) c.clock = v;
+    else rest.push_back(argv[i]);
+  }
+  if (c.mode != "bench" && c.mode != "units" && c.mode != "smoothers")
+    throw std::invalid_argument("--xb_mode must be bench, units or smoothers, not '" + c.mode + "'");
+  if (c.clock != "wall" && c.clock != "cpu") throw std::invalid_argument("--xb_clock must be wall or cpu, not '" + c.clock + "'");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   Config c;
   std::vector<char*> rest{argv[0]};
   try {
-    for (int i = 1; i < argc; ++i) {
-      std::string v;
-      if (take(argv[i], "--xb_system", v)) c.system = v;
-      else if (take(argv[i], "--xb_scene", v)) c.scene = v;
-      else if (take(argv[i], "--xb_set", v)) c.sets.push_back(v);
-      else if (take(argv[i], "--xb_frame", v)) c.frame = std::stoi(v);
-      else if (take(argv[i], "--xb_iteration", v)) c.iteration = std::stoi(v);
-      else if (take(argv[i], "--xb_min_rows", v)) c.min_rows = std::stol(v);
-      else rest.push_back(argv[i]);
-    }
+    parse_args(argc, argv, c, rest);
   } catch (const std::exception& e) {
     std::cerr << "xb_bench: bad option: " << e.what() << "\n";
     return 2;
@@ -188,6 +210,19 @@ int main(int argc, char** argv) {
   }
   if (s.p.threads > 0) omp_set_num_threads(s.p.threads);
   sys = &s;
+  try {
+    if (c.mode == "units") {
+      xb::bench::kernel_units(s.cs, s.p, c.budget, c.units_json, c.clock == "cpu");
+      return 0;
+    }
+    if (c.mode == "smoothers") {
+      xb::bench::smoother_table(s.cs, s.p, std::filesystem::path(s.label).stem().string(), c.clock == "cpu");
+      return 0;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "xb_bench: " << e.what() << "\n";
+    return 2;
+  }
   benchmark::AddCustomContext("system", s.label);
   benchmark::AddCustomContext("rows", std::to_string(s.A.rows()));
   benchmark::AddCustomContext("nnz", std::to_string(s.A.nonZeros()));

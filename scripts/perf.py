@@ -19,6 +19,9 @@ not gated. Timed metrics are read as ratios to the triad reference of the same
 run; a ratio more than 25 % above the baseline's is flagged SLOWER but does not fail. The
 benchmarks run single-threaded by default and the ratios are of CPU times: on a shared, loaded
 machine wall-clock times of OpenMP teams vary several-fold, CPU times of one thread do not.
+Kernel costs in SpMV units (a kernel's time over the SpMV of the same scene in the same run:
+assembly, AMG setup/refresh, V-cycle, smoother sweeps, solves) are recorded and listed beside the
+baseline's; a change is shown, never gated.
 """
 import argparse
 import datetime
@@ -44,6 +47,8 @@ TOLERANCES = {
     "grid_complexity": 0.02,
 }
 TIME_TOLERANCE = 0.25
+SPMV_PREFIX = "spmv/"
+SPMV_UNIT_TOLERANCE = 0.5  # shown as "costlier" beyond this; report-only
 GOOD_STATUS = {"converged", "ok"}
 
 
@@ -143,22 +148,58 @@ def timing_field(threads):
     return "cpu_time" if threads == 1 else "real_time"
 
 
-def timed_ratios(gbench, field="cpu_time"):
-    """Benchmark times over the triad's, per benchmark name ({} without a triad). With
-    repetitions, each name's fastest repetition counts (the least disturbed by other load)."""
-    if not gbench:
-        return {}
+def fastest(gbench, field):
+    """Each benchmark name's fastest repetition (the least disturbed by other load); {} if none."""
     best = {}
-    for b in gbench.get("benchmarks", []):
+    for b in (gbench or {}).get("benchmarks", []):
         if b.get("run_type", "iteration") != "iteration" or b.get("error_occurred"):
             continue
         name = b.get("run_name", b["name"])
         best[name] = min(best.get(name, float("inf")), b[field])
+    return best
+
+
+def timed_ratios(gbench, field="cpu_time"):
+    """Benchmark times over the triad's, per benchmark name ({} without a triad). With
+    repetitions, each name's fastest repetition counts (the least disturbed by other load)."""
+    best = fastest(gbench, field)
     triad = [v for k, v in best.items() if k.startswith(TRIAD_PREFIX)]
     if not triad or min(triad) <= 0:
         return {}
     ref = min(triad)
     return {k: v / ref for k, v in best.items() if not k.startswith(TRIAD_PREFIX)}
+
+
+def spmv_unit_ratios(gbench, field="cpu_time"):
+    """Each kernel's time over the SpMV of the same scene (the benchmark name's last two parts,
+    e.g. cloth_hang/r16) in this run, fastest repetition of each: kernel costs in SpMV units."""
+    best = fastest(gbench, field)
+    spmv = {k[len(SPMV_PREFIX):]: v for k, v in best.items() if k.startswith(SPMV_PREFIX) and v > 0}
+    out = {}
+    for k, v in best.items():
+        case = "/".join(k.split("/")[-2:])
+        if case in spmv and not k.startswith(SPMV_PREFIX) and not k.startswith(TRIAD_PREFIX):
+            out[k] = v / spmv[case]
+    return out
+
+
+def spmv_unit_table(base, cur, out=sys.stdout):
+    """Kernel costs in SpMV units, this run beside the baseline's (report-only, never a failure)."""
+    base = base or {}
+    cu, bu = cur.get("spmv_units", {}), base.get("spmv_units")
+    if bu is None:  # a baseline recorded before the field: from its raw benchmarks
+        bu = spmv_unit_ratios(base.get("google_benchmark"), base.get("timing", {}).get("field", "cpu_time"))
+    if not cu:
+        return
+    print("\nkernel cost in SpMV units (time / SpMV time of the same scene, this run; report-only):", file=out)
+    print(f"  {'kernel':<52s} {'baseline':>9s} {'current':>9s}  note", file=out)
+    for k in sorted(cu):
+        b = bu.get(k)
+        note = ""
+        if b:
+            change = cu[k] / b - 1
+            note = f"{change:+.0%}" + (" costlier" if change > SPMV_UNIT_TOLERANCE else "")
+        print(f"  {k:<52s} {fmt(b) if b else '-':>9s} {cu[k]:9.3g}  {note}", file=out)
 
 
 # ---------------------------------------------------------------------------------------- compare
@@ -313,6 +354,7 @@ def cmd_run(a):
         "timing": {"threads": a.threads, "field": field},
         "deterministic": det,
         "timed_ratios": timed_ratios(gb, field),
+        "spmv_units": spmv_unit_ratios(gb, field),
         "google_benchmark": gb,
     }
     out = a.out or os.path.join(ROOT, "results", "perf", f"{git['sha']}.json")
@@ -328,18 +370,23 @@ def cmd_run(a):
             json.dump(record, f, indent=1)
         print(f"perf: wrote the baseline {os.path.relpath(a.baseline, ROOT)}")
         solver_ratio_table(record)
+        spmv_unit_table(None, record)
         return 0
     if not os.path.exists(a.baseline):
         sys.exit(f"perf: no baseline at {a.baseline} (make perf-baseline writes it)")
     rows = compare(load(a.baseline), record)
+    base = load(a.baseline)
     rc = print_table(rows, a.all)
     solver_ratio_table(record)
+    spmv_unit_table(base, record)
     return rc
 
 
 def cmd_compare(a):
-    rows = compare(load(a.baseline), load(a.current))
-    return print_table(rows, a.all)
+    base, cur = load(a.baseline), load(a.current)
+    rc = print_table(compare(base, cur), a.all)
+    spmv_unit_table(base, cur)
+    return rc
 
 
 def main(argv=None):

@@ -1,32 +1,82 @@
 #include "kernels.hpp"
 
+#include <omp.h>
+
+#include <algorithm>
+
 namespace xb {
+
+void row_block(const int* outer, int n, int t, int T, int& lo, int& hi) {
+  const long nnz = outer[n];
+  auto start = [&](int k) {
+    if (k <= 0) return 0;
+    if (k >= T) return n;
+    const long target = nnz * k / T;
+    return static_cast<int>(std::lower_bound(outer, outer + n, target) - outer);
+  };
+  lo = start(t);
+  hi = start(t + 1);
+}
+
+namespace {
+// Σ_k val[k]·x[cols[k]] over row i.
+inline double row_dot(const int* outer, const int* cols, const double* val, const double* x, int i) {
+  double s = 0;
+  for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * x[cols[k]];
+  return s;
+}
+}  // namespace
 
 void spmv(const SparseMatrix& A, const Vector& x, Vector& y) {
   const int n = static_cast<int>(A.rows());
-  const int* outer = A.outerIndexPtr();
-  const int* cols = A.innerIndexPtr();
-  const double* val = A.valuePtr();
+  const int* __restrict outer = A.outerIndexPtr();
+  const int* __restrict cols = A.innerIndexPtr();
+  const double* __restrict val = A.valuePtr();
   y.resize(n);
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i) {
-    double s = 0;
-    for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * x[cols[k]];
-    y[i] = s;
+  const double* __restrict xp = x.data();
+  double* __restrict yp = y.data();
+#pragma omp parallel
+  {
+    int lo, hi;
+    row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
+    for (int i = lo; i < hi; ++i) yp[i] = row_dot(outer, cols, val, xp, i);
   }
+}
+
+double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) {
+  const int n = static_cast<int>(A.rows());
+  const int* __restrict outer = A.outerIndexPtr();
+  const int* __restrict cols = A.innerIndexPtr();
+  const double* __restrict val = A.valuePtr();
+  y.resize(n);
+  const double* __restrict xp = x.data();
+  double* __restrict yp = y.data();
+  double xy = 0;
+#pragma omp parallel reduction(+ : xy)
+  {
+    int lo, hi;
+    row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
+    for (int i = lo; i < hi; ++i) {
+      yp[i] = row_dot(outer, cols, val, xp, i);
+      xy += xp[i] * yp[i];
+    }
+  }
+  return xy;
 }
 
 void residual(const SparseMatrix& A, const Vector& x, const Vector& b, Vector& r) {
   const int n = static_cast<int>(A.rows());
-  const int* outer = A.outerIndexPtr();
-  const int* cols = A.innerIndexPtr();
-  const double* val = A.valuePtr();
+  const int* __restrict outer = A.outerIndexPtr();
+  const int* __restrict cols = A.innerIndexPtr();
+  const double* __restrict val = A.valuePtr();
   r.resize(n);
-#pragma omp parallel for schedule(static)
-  for (int i = 0; i < n; ++i) {
-    double s = b[i];
-    for (int k = outer[i]; k < outer[i + 1]; ++k) s -= val[k] * x[cols[k]];
-    r[i] = s;
+  const double* __restrict xp = x.data();
+  double* __restrict rp = r.data();
+#pragma omp parallel
+  {
+    int lo, hi;
+    row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
+    for (int i = lo; i < hi; ++i) rp[i] = b[i] - row_dot(outer, cols, val, xp, i);
   }
 }
 
@@ -42,6 +92,19 @@ void axpy(double a, const Vector& x, Vector& y) {
   const long n = x.size();
 #pragma omp parallel for schedule(static)
   for (long i = 0; i < n; ++i) y[i] += a * x[i];
+}
+
+double cg_update(double alpha, const Vector& p, const Vector& Ap, Vector& x, Vector& r) {
+  const long n = p.size();
+  double rr = 0;
+#pragma omp parallel for reduction(+ : rr) schedule(static)
+  for (long i = 0; i < n; ++i) {
+    x[i] += alpha * p[i];
+    const double ri = r[i] - alpha * Ap[i];
+    r[i] = ri;
+    rr += ri * ri;
+  }
+  return rr;
 }
 
 Vector diagonal(const SparseMatrix& A) {

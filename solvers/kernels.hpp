@@ -1,18 +1,29 @@
-// Parallel (OpenMP) sparse and vector kernels on the raw CSR arrays.
+// Parallel (OpenMP) sparse and vector kernels on the raw CSR arrays (32-bit column indices).
+// The matrix kernels split the rows into one contiguous block per thread with about the same
+// number of non-zeros (row_block), so each thread streams its own slice of the values and indices
+// once; none allocates. The fused kernels do two jobs in one pass over their operands.
 #pragma once
 
 #include "../core/sparse.hpp"
 
 namespace xb {
 
+// Rows [lo, hi) of thread t of T for a CSR row pointer `outer` of n rows: contiguous blocks
+// holding about nnz/T non-zeros each.
+void row_block(const int* outer, int n, int t, int T, int& lo, int& hi);
+
 // y = A x
 void spmv(const SparseMatrix& A, const Vector& x, Vector& y);
+// y = A x, returning x·y (PCG's A p and pᵀA p in one pass).
+double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y);
 // r = b − A x
 void residual(const SparseMatrix& A, const Vector& x, const Vector& b, Vector& r);
 double dot(const Vector& a, const Vector& b);
 inline double norm2(const Vector& a) { return std::sqrt(dot(a, a)); }
 // y += a x
 void axpy(double a, const Vector& x, Vector& y);
+// PCG's update x += α p, r −= α A p, returning rᵀr of the new r (one pass over the four vectors).
+double cg_update(double alpha, const Vector& p, const Vector& Ap, Vector& x, Vector& r);
 // The diagonal of A (zero where a row has no diagonal entry).
 Vector diagonal(const SparseMatrix& A);
 

@@ -21,6 +21,7 @@ const SettingTable<AmgSettings>& amg_settings() {
       setting("amg.setup_interval", "frames between rebuilds of aggregates and P", &S::setup_interval, 1, 1e9),
       setting("amg.max_coarse", "stop coarsening at this many rows", &S::max_coarse, 1, 1e9),
       setting("amg.max_levels", "maximum number of levels", &S::max_levels, 1, 64),
+      setting("amg.precision", "storage of the V-cycle's matrices and vectors: double | single (float, as the authors ran; CG and the coarsest solve stay double; polynomial smoothers only)", &S::precision, {"double", "single"}),
   };
   return table;
 }

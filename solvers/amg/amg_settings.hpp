@@ -25,6 +25,7 @@ struct AmgSettings {
   int setup_interval = 20;        // frames between rebuilds of aggregates and P
   int max_coarse = 400;
   int max_levels = 10;
+  std::string precision = "double";  // storage of the V-cycle: double | single (float matrices and vectors; CG stays double)
 };
 
 const SettingTable<AmgSettings>& amg_settings();

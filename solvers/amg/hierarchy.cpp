@@ -27,6 +27,7 @@ AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   o.max_levels = p.amg.max_levels;
   o.coarse_solver = p.amg.coarse_solver;
   o.jacobi_omega = p.amg.jacobi_omega;
+  o.precision = p.amg.precision;
   return o;
 }
 
@@ -45,6 +46,8 @@ void check_option_names(const AmgOptions& opt) {
   const std::string kinds = std::string(", ") + kSmootherKinds + ",";
   if (sm != "auto" && (sm.empty() || kinds.find(", " + sm + ",") == std::string::npos))
     throw Error("amg.smoother: unknown smoother '" + sm + "' (valid: auto, " + kSmootherKinds + ")");
+  if (opt.precision != "double" && opt.precision != "single")
+    throw Error("amg.precision: unknown precision '" + opt.precision + "' (valid: double, single)");
 }
 
 AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
@@ -61,6 +64,9 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
   if (o.jacobi_omega == "level0" && o.smoother.kind != "jacobi" && o.smoother.kind != "chebyshev")
     throw Error("amg.jacobi_omega=level0 needs amg.smoother jacobi or chebyshev (the smoother is " + o.smoother.kind + ")");
   if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
+  if (o.precision == "single" && (o.smoother.kind == "gs" || o.smoother.kind == "block_gs"))
+    throw Error("amg.precision=single runs the polynomial smoothers (jacobi, chebyshev, block_jacobi, block_chebyshev), not amg.smoother=" +
+                o.smoother.kind);
   return o;
 }
 
@@ -83,6 +89,7 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   if (opt_.coarse_solver == "smoother") levels_.back().smoother = make_smoother(opt_.smoother, *levels_.back().A, levels_.back().nodes);
   factor_coarsest();
   share_level0_lambda();
+  if (opt_.precision == "single") make_single();  // after the shared λ, which the float copies take
 }
 
 void Hierarchy::share_level0_lambda() {
@@ -153,6 +160,7 @@ void Hierarchy::refresh(const SparseMatrix& A) {
   if (levels_.back().smoother) levels_.back().smoother->refresh(*levels_.back().A);
   factor_coarsest();
   share_level0_lambda();
+  if (opt_.precision == "single") make_single();
 }
 
 void Hierarchy::factor_coarsest() {

@@ -54,10 +54,13 @@ struct AmgOptions {
   int max_levels = 10;
   std::string coarse_solver = "direct";   // direct | smoother
   std::string jacobi_omega = "per_level";  // per_level | level0
+  // Storage of the V-cycle: "double", or "single" (float copies of every level's A, P, R and of
+  // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
+  std::string precision = "double";
   // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
   // amg.coarse_nodal_strength_threshold, amg.aggregation, amg.near_kernel*, amg.prolongator,
   // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, amg.coarse_solver,
-  // amg.jacobi_omega, seed).
+  // amg.jacobi_omega, amg.precision, seed).
   static AmgOptions from_settings(const SolverSettings& p);
 };
 
@@ -84,6 +87,13 @@ void check_option_names(const AmgOptions& opt);
 // a smoother other than jacobi or chebyshev.
 AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info);
 
+// A level in single precision (amg.precision = single).
+struct SingleLevel {
+  CsrOf<float> A, P, R;
+  DiagonalRelaxation<float> relax;
+  VectorOf<float> x, b, r;  // V-cycle work vectors
+};
+
 struct Level {
   const SparseMatrix* A = nullptr;  // level 0: the caller's matrix; coarser: &A_own
   SparseMatrix A_own;
@@ -95,6 +105,7 @@ struct Level {
   GalerkinProduct product;          // otherwise: the general product with its cached pattern
   std::unique_ptr<Smoother> smoother;
   Vector x, b, r;                   // V-cycle work vectors
+  SingleLevel single;               // amg.precision = single only
 };
 
 class Hierarchy {
@@ -122,6 +133,10 @@ class Hierarchy {
   // Builds level l+1 from level l; false when level l cannot be coarsened (it stays coarsest).
   bool coarsen(Eigen::MatrixXd& B);
   void factor_coarsest();
+  // amg.precision = single: the float copies of the levels (after setup and refresh) and the
+  // V-cycle on them (vcycle.cpp).
+  void make_single();
+  void vcycle_single(const Vector& b, Vector& x);
   void coarse_solve(const Vector& b, Vector& x);
   // jacobi_omega = level0: level 0's λ_max on every coarser level's smoother.
   void share_level0_lambda();

@@ -1,36 +1,66 @@
 // Hierarchy::vcycle, Algorithm 2: down the levels (pre-smooth from zero, restrict the residual),
 // direct solve on the coarsest, up the levels (prolongate and add the correction, post-smooth).
-// Loops, no recursion.
+// Loops, no recursion. The same in single precision (amg.precision = single): float copies of
+// the levels, the coarsest solve in double.
 #include "hierarchy.hpp"
 
+#include "../../core/error.hpp"
 #include "../kernels.hpp"
 
 namespace xb::amg {
 
 namespace {
 // r = b − A x, then b_c = R r (both parallel over rows on the levels big enough to pay for it).
-void residual_restrict(const SparseMatrix& A, const SparseMatrix& R, const Vector& x, const Vector& b, Vector& r,
-                       Vector& bc) {
+template <class S>
+void residual_restrict(const CsrOf<S>& A, const CsrOf<S>& R, const VectorOf<S>& x, const VectorOf<S>& b,
+                       VectorOf<S>& r, VectorOf<S>& bc) {
   const int n = static_cast<int>(A.rows()), nc = static_cast<int>(R.rows());
   const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr(), *ro = R.outerIndexPtr(), *rc = R.innerIndexPtr();
-  const double *av = A.valuePtr(), *rv = R.valuePtr();
+  const S *av = A.valuePtr(), *rv = R.valuePtr();
   r.resize(n);
   bc.resize(nc);
 #pragma omp parallel if (n > kMinParallelRows)
   {
 #pragma omp for schedule(static)
     for (int i = 0; i < n; ++i) {
-      double s = b[i];
+      S s = b[i];
       for (int k = ao[i]; k < ao[i + 1]; ++k) s -= av[k] * x[ac[k]];
       r[i] = s;
     }
 #pragma omp for schedule(static)
     for (int c = 0; c < nc; ++c) {
-      double s = 0;
+      S s = 0;
       for (int k = ro[c]; k < ro[c + 1]; ++k) s += rv[k] * r[rc[k]];
       bc[c] = s;
     }
   }
+}
+
+// x += P x_c
+template <class S>
+void prolongate_add(const CsrOf<S>& P, const VectorOf<S>& xc, VectorOf<S>& x) {
+  const int n = static_cast<int>(P.rows());
+  const int *po = P.outerIndexPtr(), *pc = P.innerIndexPtr();
+  const S* pv = P.valuePtr();
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+  for (int i = 0; i < n; ++i) {
+    S s = 0;
+    for (int k = po[i]; k < po[i + 1]; ++k) s += pv[k] * xc[pc[k]];
+    x[i] += s;
+  }
+}
+
+// dst = src in float: the values only where the pattern is already there (a refresh).
+void copy_single(const SparseMatrix& src, CsrOf<float>& dst) {
+  if (dst.rows() != src.rows() || dst.nonZeros() != src.nonZeros()) {
+    dst = src.cast<float>();
+    return;
+  }
+  const long nnz = src.nonZeros();
+  const double* v = src.valuePtr();
+  float* f = dst.valuePtr();
+#pragma omp parallel for schedule(static) if (nnz > kMinParallelRows)
+  for (long k = 0; k < nnz; ++k) f[k] = static_cast<float>(v[k]);
 }
 }  // namespace
 
@@ -39,6 +69,10 @@ void Hierarchy::vcycle(const Vector& b, Vector& x) {
   x.resize(b.size());
   if (nl == 1) {
     coarse_solve(b, x);
+    return;
+  }
+  if (opt_.precision == "single") {
+    vcycle_single(b, x);
     return;
   }
   auto rhs = [&](int l) -> const Vector& { return l == 0 ? b : levels_[l].b; };
@@ -53,20 +87,44 @@ void Hierarchy::vcycle(const Vector& b, Vector& x) {
   coarse_solve(levels_[nl - 1].b, levels_[nl - 1].x);
   for (int l = nl - 2; l >= 0; --l) {
     Level& L = levels_[l];
-    Vector& xl = sol(l);
-    const Vector& xc = levels_[l + 1].x;
-    const int n = static_cast<int>(L.T.P.rows());
-    const int* po = L.T.P.outerIndexPtr();
-    const int* pc = L.T.P.innerIndexPtr();
-    const double* pv = L.T.P.valuePtr();
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-    for (int i = 0; i < n; ++i) {
-      double s = 0;
-      for (int k = po[i]; k < po[i + 1]; ++k) s += pv[k] * xc[pc[k]];
-      xl[i] += s;
-    }
-    L.smoother->postsmooth(*L.A, rhs(l), xl);
+    prolongate_add(L.T.P, levels_[l + 1].x, sol(l));
+    L.smoother->postsmooth(*L.A, rhs(l), sol(l));
   }
+}
+
+void Hierarchy::make_single() {
+  for (size_t l = 0; l + 1 < levels_.size(); ++l) {
+    Level& L = levels_[l];
+    const DiagonalRelaxation<double>* relax = L.smoother->relaxation();
+    if (!relax) throw Error("amg.precision=single: the smoother " + L.smoother->name() + " has no single-precision form");
+    copy_single(*L.A, L.single.A);
+    if (L.single.P.nonZeros() != L.T.P.nonZeros()) {
+      L.single.P = L.T.P.cast<float>();
+      L.single.R = L.T.R.cast<float>();
+    }
+    L.single.relax = to_single(*relax);
+  }
+}
+
+void Hierarchy::vcycle_single(const Vector& b, Vector& x) {
+  const int nl = num_levels();
+  levels_[0].single.b = b.cast<float>();
+  for (int l = 0; l + 1 < nl; ++l) {
+    SingleLevel& F = levels_[l].single;
+    F.x.resize(F.A.rows());
+    F.relax.presmooth(F.A, F.b, F.x, true);
+    residual_restrict(F.A, F.R, F.x, F.b, F.r, levels_[l + 1].single.b);
+  }
+  Level& C = levels_[nl - 1];
+  C.b = C.single.b.cast<double>();
+  coarse_solve(C.b, C.x);
+  C.single.x = C.x.cast<float>();
+  for (int l = nl - 2; l >= 0; --l) {
+    SingleLevel& F = levels_[l].single;
+    prolongate_add(F.P, levels_[l + 1].single.x, F.x);
+    F.relax.postsmooth(F.A, F.b, F.x);
+  }
+  x = levels_[0].single.x.cast<double>();
 }
 
 }  // namespace xb::amg

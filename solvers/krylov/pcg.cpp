@@ -38,18 +38,16 @@ LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Precond
   double rz = dot(r, z);
   st.status = LinearStatus::max_iterations;
   for (int k = 0; k < max_iterations; ++k) {
-    spmv(A, p, Ap);
-    const double pAp = dot(p, Ap);
+    const double pAp = spmv_dot(A, p, Ap);
     if (!(pAp > 0) || !std::isfinite(pAp) || !(rz > 0)) {
       st.status = LinearStatus::breakdown;
       st.message = !(pAp > 0) ? "p'Ap <= 0: matrix not positive definite" : "r'z <= 0: preconditioner not positive definite";
       break;
     }
     const double alpha = rz / pAp;
-    axpy(alpha, p, x);
-    axpy(-alpha, Ap, r);
+    const double rr = cg_update(alpha, p, Ap, x, r);
     st.iterations = k + 1;
-    const double rnorm = relative(r) * bnorm;
+    const double rnorm = rel ? rel(r) * bnorm : std::sqrt(rr);
     st.residual_history.push_back(rnorm);
     st.residual_time.push_back(clock.seconds());
     if (!std::isfinite(rnorm)) {

@@ -27,6 +27,12 @@ class BlockDiagonal {
   }
   // D_I⁻¹, row-major b_I × b_I.
   const double* inverse_block(int I) const { return inv_.data() + offset_[I]; }
+  // The node starts, block offsets and row-major D_I⁻¹ blocks (DiagonalRelaxation's layout).
+  void export_inverse(std::vector<int>& start, std::vector<long>& offset, std::vector<double>& inv) const {
+    start = start_;
+    offset = offset_;
+    inv = inv_;
+  }
 
  private:
   std::vector<int> start_;     // node rows, as NodeLayout::node_start

@@ -80,87 +80,35 @@ void Smoother::set_lambda_max(double) {
 
 namespace {
 
-class DiagonalSmoother : public Smoother {
+// jacobi and chebyshev in D⁻¹A, D the scalar diagonal.
+class DiagonalSmoother final : public Smoother {
  public:
   DiagonalSmoother(const SmootherOptions& opt, const SparseMatrix& A) : opt_(opt) {
-    inv_diag_ = inverse_diagonal(A);
-    lambda_ = estimate_lambda_max(A, inv_diag_, eigvec_, opt_.power_iterations, opt_.seed);
-    check(A);
+    relax_.chebyshev = opt.kind == "chebyshev";
+    relax_.sweeps = opt.sweeps;
+    update(A, opt_.power_iterations);
   }
-  void refresh(const SparseMatrix& A) override {
-    inv_diag_ = inverse_diagonal(A);
-    lambda_ = estimate_lambda_max(A, inv_diag_, eigvec_, opt_.refresh_power_iterations, opt_.seed);
-    check(A);
+  std::string name() const override { return opt_.kind; }
+  void refresh(const SparseMatrix& A) override { update(A, opt_.refresh_power_iterations); }
+  double lambda_max() const override { return relax_.lambda; }
+  const DiagonalRelaxation<double>* relaxation() const override { return &relax_; }
+  void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override {
+    relax_.presmooth(A, b, x, x_zero);
   }
-  double lambda_max() const override { return lambda_; }
-  void set_lambda_max(double lambda) override { lambda_ = lambda; }
+  void set_lambda_max(double lambda) override { relax_.lambda = lambda; }
+  void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { relax_.postsmooth(A, b, x); }
 
- protected:
-  void check(const SparseMatrix& A) {
-    if (!(lambda_ > 0) || !std::isfinite(lambda_))
+ private:
+  void update(const SparseMatrix& A, int lanczos_steps) {
+    relax_.inv_diag = inverse_diagonal(A);
+    relax_.lambda = estimate_lambda_max(A, relax_.inv_diag, eigvec_, lanczos_steps, opt_.seed);
+    if (!(relax_.lambda > 0) || !std::isfinite(relax_.lambda))
       throw Error("amg.smoother=" + opt_.kind + ": no positive spectral radius estimate on a level of " +
                   std::to_string(A.rows()) + " rows (matrix not positive definite?)");
   }
-  // r = D⁻¹(b − A x)
-  void scaled_residual(const SparseMatrix& A, const Vector& b, const Vector& x, Vector& r) const {
-    const int n = static_cast<int>(A.rows());
-    const int* outer = A.outerIndexPtr();
-    const int* cols = A.innerIndexPtr();
-    const double* val = A.valuePtr();
-    r.resize(n);
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-    for (int i = 0; i < n; ++i) {
-      double s = b[i];
-      for (int k = outer[i]; k < outer[i + 1]; ++k) s -= val[k] * x[cols[k]];
-      r[i] = inv_diag_[i] * s;
-    }
-  }
   SmootherOptions opt_;
-  Vector inv_diag_, eigvec_, r_, d_;
-  double lambda_ = 0;
-};
-
-class JacobiSmoother final : public DiagonalSmoother {
- public:
-  using DiagonalSmoother::DiagonalSmoother;
-  std::string name() const override { return "jacobi"; }
-  void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override {
-    const double omega = 1.0 / lambda_;
-    const long n = b.size();
-    for (int s = 0; s < opt_.sweeps; ++s) {
-      if (s == 0 && x_zero) {
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-        for (long i = 0; i < n; ++i) x[i] = omega * inv_diag_[i] * b[i];
-        continue;
-      }
-      scaled_residual(A, b, x, r_);
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-      for (long i = 0; i < n; ++i) x[i] += omega * r_[i];
-    }
-  }
-  void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { presmooth(A, b, x, false); }
-};
-
-class ChebyshevSmoother final : public DiagonalSmoother {
- public:
-  using DiagonalSmoother::DiagonalSmoother;
-  std::string name() const override { return "chebyshev"; }
-  void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override {
-    for (int s = 0; s < opt_.sweeps; ++s) apply(A, b, x, x_zero && s == 0);
-  }
-  void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { presmooth(A, b, x, false); }
-
- private:
-  void apply(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) {
-    chebyshev_iteration(
-        lambda_, b.size(), x, x_zero, r_, d_, [&](Vector& r) { scaled_residual(A, b, x, r); },
-        [&](Vector& r) {
-          const long n = b.size();
-          r.resize(n);
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-          for (long i = 0; i < n; ++i) r[i] = inv_diag_[i] * b[i];
-        });
-  }
+  DiagonalRelaxation<double> relax_;
+  Vector eigvec_;
 };
 
 class GaussSeidelSmoother final : public Smoother {
@@ -190,8 +138,7 @@ const char* const kSmootherKinds = "jacobi, chebyshev, gs, block_gs, block_jacob
 
 std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes) {
   if (opt.sweeps < 1) throw Error("amg.smoother_sweeps must be >= 1");
-  if (opt.kind == "jacobi") return std::make_unique<JacobiSmoother>(opt, A);
-  if (opt.kind == "chebyshev") return std::make_unique<ChebyshevSmoother>(opt, A);
+  if (opt.kind == "jacobi" || opt.kind == "chebyshev") return std::make_unique<DiagonalSmoother>(opt, A);
   if (opt.kind == "gs") return std::make_unique<GaussSeidelSmoother>(opt, A);
   if (opt.kind == "block_gs") return std::make_unique<BlockGaussSeidelSmoother>(opt, A, nodes);
   if (opt.kind == "block_jacobi" || opt.kind == "block_chebyshev") return make_block_diagonal_smoother(opt, A, nodes);

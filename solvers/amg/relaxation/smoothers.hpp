@@ -15,6 +15,7 @@
 #include "../../../core/sparse.hpp"
 #include "../../coloring.hpp"
 #include "../nodal.hpp"
+#include "diagonal_relaxation.hpp"
 
 #include <memory>
 #include <string>
@@ -39,39 +40,6 @@ void multicolor_gs_sweep(const SparseMatrix& A, const Vector& inv_diag, const Co
 double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector& v, int iterations,
                            unsigned seed = 1);
 
-// The degree-3 Chebyshev iteration for D⁻¹A with eigenvalues in [λ/30, 1.1λ] (Saad, Alg. 12.1):
-// the error is multiplied by a fixed polynomial of D⁻¹A, the same before and after, hence
-// symmetric. scaled_residual(r) sets r = D⁻¹(b − A x) for the current x; scale(r) sets r = D⁻¹b
-// (the residual of x = 0, without a product). r and d are work vectors.
-template <class ScaledResidual, class Scale>
-void chebyshev_iteration(double lambda, long n, Vector& x, bool x_zero, Vector& r, Vector& d,
-                         ScaledResidual&& scaled_residual, Scale&& scale) {
-  constexpr int kDegree = 3;
-  const double hi = 1.1 * lambda, lo = lambda / 30.0;
-  const double theta = 0.5 * (hi + lo), delta = 0.5 * (hi - lo), sigma = theta / delta;
-  double rho = 1.0 / sigma;
-  if (x_zero)
-    scale(r);
-  else
-    scaled_residual(r);
-  d = r / theta;
-  for (int k = 1;; ++k) {
-    if (x_zero && k == 1) {
-      x = d;
-    } else {
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-      for (long i = 0; i < n; ++i) x[i] += d[i];
-    }
-    if (k == kDegree) break;
-    scaled_residual(r);
-    const double rho_new = 1.0 / (2.0 * sigma - rho);
-    const double c1 = rho_new * rho, c2 = 2.0 * rho_new / delta;
-#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
-    for (long i = 0; i < n; ++i) d[i] = c1 * d[i] + c2 * r[i];
-    rho = rho_new;
-  }
-}
-
 class Smoother {
  public:
   virtual ~Smoother() = default;
@@ -91,6 +59,9 @@ class Smoother {
   // presmooth from x = 0 is a symmetric operator of b (polynomials in D⁻¹A times D⁻¹); false for
   // the Gauss–Seidel kinds, whose forward sweeps need the backward ones after them.
   virtual bool symmetric_from_zero() const { return true; }
+  // The polynomial kinds' relaxation (jacobi, chebyshev and their block forms; null for the
+  // Gauss–Seidel kinds): what the V-cycle's single-precision copy is made from.
+  virtual const DiagonalRelaxation<double>* relaxation() const { return nullptr; }
 };
 
 struct SmootherOptions {

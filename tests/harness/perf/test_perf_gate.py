@@ -132,6 +132,28 @@ class CompareRules(unittest.TestCase):
         self.assertEqual(perf.timed_ratios(gb, "cpu_time"), {"solve/cg/x": 4.0})
         self.assertEqual(perf.timed_ratios(gb, "real_time"), {"solve/cg/x": 5.0})
 
+    def test_spmv_units_per_scene_are_reported_never_gated(self):
+        gb = {"benchmarks": [
+            {"name": "triad/n:8", "run_type": "iteration", "cpu_time": 1.0},
+            {"name": "spmv/cloth/r16", "run_type": "iteration", "cpu_time": 2.0},
+            {"name": "spmv/cloth/r16", "run_type": "iteration", "cpu_time": 3.0},
+            {"name": "spmv/bar/r3", "run_type": "iteration", "cpu_time": 4.0},
+            {"name": "amg_vcycle/cloth/r16", "run_type": "iteration", "cpu_time": 14.0},
+            {"name": "amg_vcycle/bar/r3", "run_type": "iteration", "cpu_time": 20.0},
+            {"name": "assembly/other/r1", "run_type": "iteration", "cpu_time": 5.0},
+        ]}
+        units = perf.spmv_unit_ratios(gb, "cpu_time")
+        self.assertEqual(units, {"amg_vcycle/cloth/r16": 7.0, "amg_vcycle/bar/r3": 5.0})
+        base = metrics_file(self.BASE)
+        base["spmv_units"] = {"amg_vcycle/cloth/r16": 3.5}
+        cur = metrics_file(self.BASE)
+        cur["spmv_units"] = units
+        rc, out = gate(base, cur)
+        self.assertEqual(rc, 0, out)
+        table = io.StringIO()
+        perf.spmv_unit_table(base, cur, table)
+        self.assertIn("+100% costlier", table.getvalue())
+
     def test_timings_measured_differently_are_not_compared(self):
         base = metrics_file(self.BASE, ratios={"solve/mgpbd/x": 2.0})
         cur = metrics_file(self.BASE, ratios={"solve/mgpbd/x": 4.0})
