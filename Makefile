@@ -9,7 +9,7 @@ JOBS   ?= $(shell nproc)
 # on cloth_hang 0.15 s passive vs 0.33-31 s active under load). Set it yourself to override.
 export OMP_WAIT_POLICY ?= passive
 
-.PHONY: setup build demo test clean figures perf perf-baseline
+.PHONY: setup build demo test test-asan fuzz clean figures perf perf-baseline
 
 setup:
 	@bash scripts/setup.sh
@@ -36,6 +36,27 @@ figures: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
+# The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer (GCC, -O1) in
+# build-asan/; the first report fails its test. The options (each one's reason in
+# scripts/asan_env.sh) let OpenMPI and OpenMP run under ASan.
+ASAN_BUILD ?= build-asan
+test-asan: setup
+	@cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Sanitize -DXB_SANITIZE=ON >/dev/null
+	@cmake --build $(ASAN_BUILD) -j $(JOBS)
+	. scripts/asan_env.sh && cd $(ASAN_BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# libFuzzer targets, one per reader of user files (fuzz/README.md), built with clang into
+# build-fuzz/ and run one after the other for FUZZ_SECONDS each, seeded from the test data;
+# FUZZ_TARGETS picks some. A finding stops it, with the input under build-fuzz/findings/.
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS ?= tetgen gmsh medit scene sweep system results
+fuzz: setup
+	@cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+	  -DCMAKE_BUILD_TYPE=Sanitize -DXB_FUZZ=ON -DXB_WITH_HYPRE=OFF -DXB_WITH_MUELU=OFF >/dev/null
+	@cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_all
+	bash fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+
 # CI performance tracking: microbenchmarks + deterministic metrics into
 # results/perf/<git-sha>.json, compared with results/baselines/perf.json; fails when an iteration
 # count (+10 %) or operator complexity (+2 %) got worse. PERF_FLAGS=--short: the CI gate's form.
@@ -48,4 +69,4 @@ perf-baseline: build
 	$(PYTHON) scripts/perf.py run --build $(BUILD) --write-baseline
 
 clean:
-	rm -rf $(BUILD)
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD)

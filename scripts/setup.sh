@@ -10,6 +10,7 @@ DEB_PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libhypre-dev trilinos-all-dev libptscotch-dev openmpi-bin libopenmpi-dev
   tetgen gmsh
+  clang libclang-rt-14-dev llvm   # make fuzz (libFuzzer, sanitizer runtimes, llvm-symbolizer)
 )
 PY_PACKAGES=(numpy h5py matplotlib scipy pyamg)
 

@@ -98,8 +98,9 @@ int cmd_run(const CommandArgs& argv) {
     RunOptions run_opt = opt;
     if (args.has("--write-meshes")) {  // DIR/<scene>_<solver>_NNNN.ply per frame
       const std::string dir = args.get("--write-meshes");
-      run_opt.on_frame = [&, dir](int frame, const Eigen::Matrix3Xd& x) {
-        write_ply(frame_ply_path(dir, p.scene + "_" + tag, frame), prob, x);
+      // The name is captured by value: clang 14 cannot capture a structured binding.
+      run_opt.on_frame = [&, dir, name = p.scene + "_" + tag](int frame, const Eigen::Matrix3Xd& x) {
+        write_ply(frame_ply_path(dir, name, frame), prob, x);
       };
     }
     if (!save_state.empty())

@@ -7,64 +7,44 @@
 
 namespace xb {
 
+namespace {
+// Names sharing a level and a type.
+struct SchemaGroup {
+  std::string level, type;
+  std::vector<std::string> names;
+};
+std::vector<SchemaName> expand(const std::vector<SchemaGroup>& groups) {
+  std::vector<SchemaName> out;
+  for (const auto& g : groups)
+    for (const auto& n : g.names) out.push_back({n, g.level, g.type});
+  return out;
+}
+}  // namespace
+
 const ResultsSchema& results_schema() {
+  // Attributes: every run's (what, how it ended, provenance, solver statistics), then simulation
+  // runs' (summary, local-method details, the reference, sweeps), then linear runs' (solve).
   static const ResultsSchema s = {
-      {
-          // every run: what, how it ended, provenance
-          {"level", "any", "string"}, {"scene", "any", "string"}, {"solver", "any", "string"},
-          {"form_used", "any", "string"}, {"status", "any", "string"}, {"message", "any", "string"},
-          {"git_sha", "any", "string"}, {"machine", "any", "string"}, {"created", "any", "string"},
-          {"omp_threads", "any", "int"}, {"omp_wait_policy", "any", "string"}, {"load_average", "any", "float"},
-          {"cpu_count", "any", "int"}, {"rows", "any", "number"},
-          // solver statistics (statistics() of the LinearSolver)
-          {"levels", "any", "float"}, {"operator_complexity", "any", "float"}, {"grid_complexity", "any", "float"},
-          {"factor_nnz", "any", "float"}, {"factor_flops", "any", "float"}, {"mpi_ranks", "any", "float"},
-          {"setup_count", "any", "float"}, {"refresh_count", "any", "float"}, {"setup_full", "any", "float"},
-          {"setup_reused", "any", "float"}, {"setup_time_total", "any", "float"}, {"refresh_time_total", "any", "float"},
-          {"primal_rows", "any", "float"}, {"primal_nonzeros", "any", "float"},
-          // simulation runs
-          {"profile", "simulation", "string"}, {"outer_iterations", "simulation", "int"},
-          {"final_dual_residual", "simulation", "float"}, {"relative_dual_residual", "simulation", "float"},
-          {"final_authors_dual_residual", "simulation", "float"}, {"wall_time", "simulation", "float"},
-          {"substeps_total", "simulation", "int"}, {"substeps_converged", "simulation", "int"},
-          {"nonzeros", "simulation", "float"}, {"particles", "simulation", "float"}, {"colors", "simulation", "float"},
-          {"jacobi_relaxation_used", "simulation", "float"}, {"authors_skipped_last_sweep", "simulation", "float"},
-          {"time_budget", "simulation", "float"}, {"reference", "simulation", "int"},
-          {"reference_method", "simulation", "string"}, {"reference_dual_residual", "simulation", "float"},
-          {"reference_substeps_unconverged", "simulation", "int"}, {"reference_time", "simulation", "float"},
-          {"final_position_error", "simulation", "float"},
-          {"sweep_spec", "simulation", "string"}, {"sweep_description", "simulation", "string"},
-          {"sweep_params", "simulation", "string"}, {"sweep_point", "simulation", "string"},
-          {"sweep_key", "simulation", "string"}, {"sweep_base", "simulation", "string"},
-          {"sweep_index", "simulation", "int"}, {"sweep_repeat", "simulation", "int"},
-          // linear runs (solve on a captured system)
-          {"system", "linear", "string"}, {"frame", "linear", "int"}, {"substep", "linear", "int"},
-          {"iteration", "linear", "int"}, {"capture_solver", "linear", "string"}, {"asymmetry", "linear", "float"},
-          {"nnz", "linear", "int"}, {"rhs_norm", "linear", "float"}, {"direct_status", "linear", "string"},
-          {"direct_relative_residual", "linear", "float"}, {"iterations", "linear", "int"},
-          {"final_relative_residual", "linear", "float"}, {"reported_relative_residual", "linear", "float"},
-          {"setup_time", "linear", "float"}, {"solve_time", "linear", "float"},
-          {"error_vs_direct", "linear", "float"}, {"error_vs_direct_l2", "linear", "float"},
-      },
-      {
-          {"level_rows", "any", "float"}, {"level_nnz", "any", "float"},
-          // simulation runs: one entry per evaluation of the dual residual
-          {"frame", "simulation", "int"}, {"substep", "simulation", "int"}, {"iteration", "simulation", "int"},
-          {"dual_residual", "simulation", "float"}, {"relative_dual_residual", "simulation", "float"},
-          {"authors_dual_residual", "simulation", "float"}, {"authors_relative_dual_residual", "simulation", "float"},
-          {"primal_residual", "simulation", "float"}, {"energy", "simulation", "float"},
-          {"wall_time", "simulation", "float"}, {"step_time", "simulation", "float"}, {"step_length", "simulation", "float"},
-          {"linear_iterations", "simulation", "int"}, {"linear_setup_time", "simulation", "float"},
-          {"linear_solve_time", "simulation", "float"}, {"linear_relative_residual", "simulation", "float"},
-          {"linear_setup_action", "simulation", "string"}, {"linear_history/residual", "simulation", "float"},
-          {"linear_history/time", "simulation", "float"}, {"linear_history/offset", "simulation", "int"},
-          {"position_error", "simulation", "float"}, {"reference/relative_dual_residual", "simulation", "float"},
-          {"reference/iterations", "simulation", "int"}, {"reference/status", "simulation", "string"},
-          {"final_positions", "simulation", "float"}, {"distance_edges", "simulation", "float"},
-          {"distance_rest_length", "simulation", "float"}, {"inverted_tets", "simulation", "float"},
-          // linear runs
-          {"residual", "linear", "float"}, {"time", "linear", "float"}, {"solution", "linear", "float"},
-      },
+      expand({
+          {"any", "string", {"level", "scene", "solver", "form_used", "status", "message", "git_sha", "machine", "created", "omp_wait_policy"}},
+          {"any", "int", {"omp_threads", "cpu_count"}},
+          {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "mpi_ranks", "setup_count", "refresh_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "primal_rows", "primal_nonzeros"}},
+          {"any", "number", {"rows"}},
+          {"simulation", "string", {"profile", "reference_method", "sweep_spec", "sweep_description", "sweep_params", "sweep_point", "sweep_key", "sweep_base"}},
+          {"simulation", "int", {"outer_iterations", "substeps_total", "substeps_converged", "reference", "reference_substeps_unconverged", "sweep_index", "sweep_repeat"}},
+          {"simulation", "float", {"final_dual_residual", "relative_dual_residual", "final_authors_dual_residual", "wall_time", "nonzeros", "particles", "colors", "jacobi_relaxation_used", "authors_skipped_last_sweep", "time_budget", "reference_dual_residual", "reference_time", "final_position_error"}},
+          {"linear", "string", {"system", "capture_solver", "direct_status"}},
+          {"linear", "int", {"frame", "substep", "iteration", "nnz", "iterations"}},
+          {"linear", "float", {"asymmetry", "rhs_norm", "direct_relative_residual", "final_relative_residual", "reported_relative_residual", "setup_time", "solve_time", "error_vs_direct", "error_vs_direct_l2"}},
+      }),
+      // Datasets: AMG level sizes, simulation runs' per-evaluation entries, linear runs' histories.
+      expand({
+          {"any", "float", {"level_rows", "level_nnz"}},
+          {"simulation", "int", {"frame", "substep", "iteration", "linear_iterations", "linear_history/offset", "reference/iterations"}},
+          {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "energy", "wall_time", "step_time", "step_length", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets"}},
+          {"simulation", "string", {"linear_setup_action", "reference/status"}},
+          {"linear", "float", {"residual", "time", "solution"}},
+      }),
   };
   return s;
 }
