@@ -3,7 +3,7 @@
 // end only in xb::Error. Any other exception is a finding (the CLI would print "internal error").
 #pragma once
 
-#include "problems/error.hpp"
+#include "core/error.hpp"
 
 #include <cstdint>
 #include <cstdio>
