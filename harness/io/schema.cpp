@@ -55,6 +55,9 @@ const SchemaName* find(const std::vector<SchemaName>& names, const std::string& 
     if (n.name == name && (n.level == "any" || n.level == level)) return &n;
   return nullptr;
 }
+const char* type_name(SettingType t) {
+  return t == SettingType::Int ? "int" : t == SettingType::Double ? "float" : "string";
+}
 bool type_fits(const std::string& type, int index) {  // index: 0 int, 1 float, 2 string
   if (type == "number") return index < 2;
   return (type == "int" && index == 0) || (type == "float" && index == 1) || (type == "string" && index == 2);
@@ -70,8 +73,7 @@ void check_against_schema(const RunRecord& r) {
   };
   for (const auto& [k, v] : r.attrs) {
     if (const ParamField* f = find_param(k)) {
-      const int want = f->type == SettingType::Int ? 0 : f->type == SettingType::Double ? 1 : 2;
-      if (static_cast<int>(v.index()) != want) fail("parameter attribute", k);
+      if (!type_fits(type_name(f->type), static_cast<int>(v.index()))) fail("parameter attribute", k);
       continue;
     }
     const SchemaName* n = find(results_schema().attributes, k, level);
@@ -98,8 +100,7 @@ std::string schema_json() {
      << "\n  ],\n  \"datasets\": [\n" << list(results_schema().datasets) << "\n  ],\n  \"parameters\": [\n";
   const auto& fields = param_fields();
   for (size_t i = 0; i < fields.size(); ++i) {
-    const char* type = fields[i].type == SettingType::Int ? "int" : fields[i].type == SettingType::Double ? "float" : "string";
-    os << (i ? ",\n" : "") << "    {\"name\": \"" << fields[i].key << "\", \"type\": \"" << type << "\"}";
+    os << (i ? ",\n" : "") << "    {\"name\": \"" << fields[i].key << "\", \"type\": \"" << type_name(fields[i].type) << "\"}";
   }
   os << "\n  ]\n}\n";
   return os.str();

@@ -87,7 +87,11 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
   if (opt_.coarse_solver == "smoother") levels_.back().smoother = make_smoother(opt_.smoother, *levels_.back().A, levels_.back().nodes);
-  factor_coarsest();
+  finish_levels();
+}
+
+void Hierarchy::finish_levels() {
+  if (opt_.coarse_solver == "direct") factor_coarsest();  // the smoother kind solves with no factor
   share_level0_lambda();
   if (opt_.precision == "single") make_single();  // after the shared λ, which the float copies take
 }
@@ -158,9 +162,7 @@ void Hierarchy::refresh(const SparseMatrix& A) {
     L.smoother->refresh(*L.A);
   }
   if (levels_.back().smoother) levels_.back().smoother->refresh(*levels_.back().A);
-  factor_coarsest();
-  share_level0_lambda();
-  if (opt_.precision == "single") make_single();
+  finish_levels();
 }
 
 void Hierarchy::factor_coarsest() {

@@ -133,6 +133,9 @@ class Hierarchy {
   // Builds level l+1 from level l; false when level l cannot be coarsened (it stays coarsest).
   bool coarsen(Eigen::MatrixXd& B);
   void factor_coarsest();
+  // After setup or refresh: the coarsest level's factor (coarse_solver = direct), the shared λ of
+  // jacobi_omega = level0, then the float copies of precision = single, which take that λ.
+  void finish_levels();
   // amg.precision = single: the float copies of the levels (after setup and refresh) and the
   // V-cycle on them (vcycle.cpp).
   void make_single();

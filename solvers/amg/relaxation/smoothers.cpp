@@ -78,37 +78,29 @@ void Smoother::set_lambda_max(double) {
   throw Error("amg.jacobi_omega=level0: smoother '" + name() + "' has no lambda_max(D^-1 A) to share (use jacobi or chebyshev)");
 }
 
+void PolynomialSmoother::check_lambda(const SparseMatrix& A) const {
+  if (!(relax_.lambda > 0) || !std::isfinite(relax_.lambda))
+    throw Error("amg.smoother=" + opt_.kind + ": no positive spectral radius estimate on a level of " +
+                std::to_string(A.rows()) + " rows (matrix not positive definite?)");
+}
+
 namespace {
 
 // jacobi and chebyshev in D⁻¹A, D the scalar diagonal.
-class DiagonalSmoother final : public Smoother {
+class DiagonalSmoother final : public PolynomialSmoother {
  public:
-  DiagonalSmoother(const SmootherOptions& opt, const SparseMatrix& A) : opt_(opt) {
-    relax_.chebyshev = opt.kind == "chebyshev";
-    relax_.sweeps = opt.sweeps;
+  DiagonalSmoother(const SmootherOptions& opt, const SparseMatrix& A) : PolynomialSmoother(opt, opt.kind == "chebyshev") {
     update(A, opt_.power_iterations);
   }
-  std::string name() const override { return opt_.kind; }
   void refresh(const SparseMatrix& A) override { update(A, opt_.refresh_power_iterations); }
-  double lambda_max() const override { return relax_.lambda; }
-  const DiagonalRelaxation<double>* relaxation() const override { return &relax_; }
-  void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override {
-    relax_.presmooth(A, b, x, x_zero);
-  }
   void set_lambda_max(double lambda) override { relax_.lambda = lambda; }
-  void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { relax_.postsmooth(A, b, x); }
 
  private:
   void update(const SparseMatrix& A, int lanczos_steps) {
     relax_.inv_diag = inverse_diagonal(A);
     relax_.lambda = estimate_lambda_max(A, relax_.inv_diag, eigvec_, lanczos_steps, opt_.seed);
-    if (!(relax_.lambda > 0) || !std::isfinite(relax_.lambda))
-      throw Error("amg.smoother=" + opt_.kind + ": no positive spectral radius estimate on a level of " +
-                  std::to_string(A.rows()) + " rows (matrix not positive definite?)");
+    check_lambda(A);
   }
-  SmootherOptions opt_;
-  DiagonalRelaxation<double> relax_;
-  Vector eigvec_;
 };
 
 class GaussSeidelSmoother final : public Smoother {

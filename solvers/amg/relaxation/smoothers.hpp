@@ -72,6 +72,32 @@ struct SmootherOptions {
   unsigned seed = 1;
 };
 
+// jacobi, chebyshev and their block forms: one DiagonalRelaxation (the polynomial in D⁻¹A). A
+// derived class sets its D and λ_max (then check_lambda) at construction and refresh; the rest is
+// shared.
+class PolynomialSmoother : public Smoother {
+ public:
+  std::string name() const override { return opt_.kind; }
+  double lambda_max() const override { return relax_.lambda; }
+  const DiagonalRelaxation<double>* relaxation() const override { return &relax_; }
+  void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) override {
+    relax_.presmooth(A, b, x, x_zero);
+  }
+  void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { relax_.postsmooth(A, b, x); }
+
+ protected:
+  explicit PolynomialSmoother(const SmootherOptions& opt, bool chebyshev) : opt_(opt) {
+    relax_.chebyshev = chebyshev;
+    relax_.sweeps = opt.sweeps;
+  }
+  // Throws naming amg.smoother when λ_max is not a positive number (A not positive definite).
+  void check_lambda(const SparseMatrix& A) const;
+
+  SmootherOptions opt_;
+  DiagonalRelaxation<double> relax_;
+  Vector eigvec_;  // the Lanczos start of the next refresh
+};
+
 // The smoother kinds make_smoother knows, for messages: "jacobi, chebyshev, ...".
 extern const char* const kSmootherKinds;
 
