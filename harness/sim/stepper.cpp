@@ -80,8 +80,8 @@ class Simulation {
   bool over_budget(double excluded);
   // Logs the state at iteration `it`; returns both residuals.
   Residuals log_state(int frame, int sub, int it, const LastStep& last, double& r0);
-  // x += step·Δx, λ += (1 or t)·Δλ by Params::step; returns the step length.
-  double apply_global_step(double current_dual);
+  // λ += Δλ, x += (ω or the line search's t)·Δx by Params::step; returns the step length.
+  double apply_global_step();
   // The method step from the state just evaluated; false if the run must stop.
   bool step(int frame, int sub, int it, LastStep& last);
   void fail(const std::string& status, const std::string& msg) {
@@ -310,17 +310,18 @@ bool Simulation::step(int frame, int sub, int it, LastStep& last) {
                           std::to_string(it) + ": " + last.linear.message);
     return false;
   }
-  last.length = apply_global_step(b_.norm());
+  last.length = apply_global_step();
   return true;
 }
 
-double Simulation::apply_global_step(double current_dual) {
+double Simulation::apply_global_step() {
   Particles& P = prob_.particles;
   ds_.apply_minv_gradT(state_, dlambda_, dx_);
   if (p_.step == "line_search") {
-    const LineSearchStep ls = backtrack_dual_residual(prob_, P.x, lambda_, dx_, dlambda_, alpha_tilde_,
-                                                      current_dual, trial_state_, x_trial_);
-    lambda_ += ls.t * dlambda_;
+    lambda_ += dlambda_;
+    const double current = (state_.C + alpha_tilde_.cwiseProduct(lambda_)).norm();  // C(x) with the new λ
+    const LineSearchStep ls = backtrack_dual_residual(prob_, P.x, lambda_, dx_, alpha_tilde_, current,
+                                                      trial_state_, x_trial_);
     P.x += ls.t * dx_;
     return ls.t;
   }

@@ -109,32 +109,36 @@ TEST(AuthorsMetric, ResidualMetricChoosesTheStopTest) {
   EXPECT_GT(authors.log.authors_relative_dual_residual.back(), 0.8);
 }
 
-// The backtracking on one linear constraint: f(t) = |d + t(w + α̃)Δλ|.
+// The backtracking on one linear constraint, λ already λ + Δλ: f(t) = |d + twΔλ + α̃Δλ|, against
+// f(0) = |d + α̃Δλ|.
 TEST(LineSearch, HalvesUntilTheDualResidualDecreases) {
   const Pendulum s;
   const Problem prob = pendulum(s.m, s.alpha);
   Eigen::Matrix3Xd x = prob.particles.x;
   x(1, 1) -= s.d();  // the predicted state: C = d
-  const Eigen::VectorXd lambda = Eigen::VectorXd::Zero(1), at = Eigen::VectorXd::Constant(1, s.at());
+  const Eigen::VectorXd at = Eigen::VectorXd::Constant(1, s.at());
   ConstraintState scratch;
   Eigen::Matrix3Xd trial;
   auto search = [&](double dl) {
-    const Eigen::VectorXd dlambda = Eigen::VectorXd::Constant(1, dl);
+    const Eigen::VectorXd lambda = Eigen::VectorXd::Constant(1, dl);  // λ = 0 + Δλ
     Eigen::Matrix3Xd dx = Eigen::Matrix3Xd::Zero(3, 2);
     dx(1, 1) = -s.w() * dl;  // M⁻¹∇CᵀΔλ: ∇C of the particle is (0, −1, 0)
-    return backtrack_dual_residual(prob, x, lambda, dx, dlambda, at, s.d(), scratch, trial);
+    return backtrack_dual_residual(prob, x, lambda, dx, at, std::abs(s.d() + s.at() * dl), scratch, trial);
   };
-  // 4× the exact step: f(1) = 3d, f(1/2) = d (not below d), f(1/4) = 0.
-  const LineSearchStep over = search(-4 * s.d() / (s.w() + s.at()));
+  // w = 1/2, α̃ = 1: x carries a = w/(w + α̃) = 1/3 of the exact step. With
+  // Δλ = −1.4·d/(w + α̃): f(t)/d = |1/15 − 1.4t/3|; f(1) = 0.4, f(1/2) = 1/6, f(1/4) = 1/20 < 1/15.
+  EXPECT_DOUBLE_EQ(s.w() / (s.w() + s.at()), 1.0 / 3);
+  const LineSearchStep over = search(-1.4 * s.d() / (s.w() + s.at()));
   EXPECT_TRUE(over.decreased);
   EXPECT_EQ(over.t, 0.25);
   EXPECT_EQ(over.trials, 3);
-  EXPECT_NEAR(over.residual, 0, 1e-12 * s.d());
-  // The wrong sign: f(t) = d(1 + t) > d for every t: the smallest trial is taken.
+  EXPECT_NEAR(over.residual, 0.05 * s.d(), 1e-9 * s.d());
+  // The wrong sign: f(t)/d = 5/3 + t/3 > f(0)/d for every t > 0: halved 30 times, to 2⁻³⁰ < 1e-9,
+  // then x stays.
   const LineSearchStep up = search(s.d() / (s.w() + s.at()));
   EXPECT_FALSE(up.decreased);
-  EXPECT_EQ(up.t, std::ldexp(1.0, -line_search_max_halvings));
-  EXPECT_EQ(up.trials, line_search_max_halvings + 1);
+  EXPECT_EQ(up.t, 0.0);
+  EXPECT_EQ(up.trials, 31);
 }
 
 // step = fixed takes ω (0.25: a quarter of the exact step each time, many iterations);
