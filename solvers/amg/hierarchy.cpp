@@ -19,6 +19,7 @@ AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   o.prolongator = p.amg.prolongator;
   o.nodal_strength_threshold = p.amg.nodal_strength_threshold;
   o.coarse_nodal_strength_threshold = p.amg.coarse_nodal_strength_threshold;
+  o.min_coarsening = p.amg.min_coarsening;
   o.prolongator_diagonal = p.amg.prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
   o.smoother.kind = p.amg.smoother;
   o.smoother.sweeps = p.amg.smoother_sweeps;
@@ -116,6 +117,9 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
                                  : opt_.nodal_strength_threshold;
   Aggregates agg = L.nodes.scalar() ? rule(strength_symmetric(Al, opt_.strength_threshold))
                                     : nodal_aggregation(Al, L.nodes, nodal_theta, rule);
+  if (!L.nodes.scalar() && levels_.size() > 1 && nodal_theta > 0 &&
+      L.nodes.num_nodes() < opt_.min_coarsening * agg.num_aggregates)
+    agg = nodal_aggregation(Al, L.nodes, 0.0, rule);
   if (agg.num_aggregates == 0) return false;  // every row isolated: nothing to coarsen onto
   Tentative T = tentative_prolongator(agg, B);
   const int nc = static_cast<int>(T.P.cols());

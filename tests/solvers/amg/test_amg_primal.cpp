@@ -132,3 +132,35 @@ TEST(AmgPrimal, LazyRefreshAndBadInput) {
   p.amg.prolongator = "energy";
   EXPECT_THROW(make_linear_solver("mgpbd", p), Error);
 }
+
+// amg.min_coarsening: on the stretched bar at resolution 8 the level-1 aggregation at θ = 0.1
+// keeps under 4 nodes per aggregate; the floor redoes it at θ = 0, so the hierarchy is the one of
+// coarse_nodal_strength_threshold = 0, with a lower operator complexity than with the floor off
+// and the same convergence.
+TEST(AmgPrimal, MinCoarseningRedoesSlowCoarseAggregation) {
+  const PrimalCase c = primal_case("bar_hang", {{"resolution", "8"}, {"prestretch", "1.05"}}, 0, 0);
+  auto hierarchy = [&](double min_coarsening, double coarse_theta) {
+    amg::AmgOptions o;
+    o.near_kernel.kind = "auto";
+    o.min_coarsening = min_coarsening;
+    o.coarse_nodal_strength_threshold = coarse_theta;
+    auto h = std::make_unique<amg::Hierarchy>();
+    h->setup(c.K, o, {3, &c.rigid});
+    return h;
+  };
+  const auto off = hierarchy(0, 0.1), floor = hierarchy(4, 0.1), theta0 = hierarchy(0, 0);
+  ASSERT_GE(off->num_levels(), 3);
+  const int nodes1 = off->level(1).nodes.num_nodes(), nodes2 = off->level(2).nodes.num_nodes();
+  EXPECT_LT(nodes1, 4 * nodes2) << nodes1 << " → " << nodes2 << ": the floor has nothing to redo";
+  EXPECT_EQ(floor->level_rows(), theta0->level_rows());
+  EXPECT_NE(floor->level_rows(), off->level_rows());
+  EXPECT_LT(floor->operator_complexity(), off->operator_complexity());
+  Vector x;
+  Params p = solver_params(1e-8);
+  p.amg.min_coarsening = 0;
+  const LinearStats st_off = solve_k(c, p, "mgpbd", x, c.dual_measure());
+  p.amg.min_coarsening = 4;
+  const LinearStats st_floor = solve_k(c, p, "mgpbd", x, c.dual_measure());
+  ASSERT_EQ(st_floor.status, LinearStatus::converged);
+  EXPECT_LE(st_floor.iterations, st_off.iterations * 11 / 10) << st_floor.iterations << " vs " << st_off.iterations;
+}
