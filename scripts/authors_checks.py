@@ -106,12 +106,15 @@ def setup_interval(a):
     # five runs from it take 100 outer iterations per frame.
     scene = ["--scene", "squash", "--profile", "authors", "--set", f"mesh={a.mesh}"]
     base = scene + ["--set", "rtol=0", "--set", "atol=0", "--set", "max_iterations=100"]
-    sh([a.bench, "run"] + scene + ["--solver", "mgpbd", "--set", f"frames={a.state_frame + 1}",
-                                  "--save-state", state, "--frame-of-state", str(a.state_frame),
-                                  "--out", os.path.join(a.out, "state_run.h5")])
+    if os.path.exists(state):
+        print(f"reusing the saved state {state} (delete it to recompute)", flush=True)
+    else:
+        sh([a.bench, "run"] + scene + ["--solver", "mgpbd", "--set", f"frames={a.state_frame + 1}",
+                                      "--save-state", state, "--frame-of-state", str(a.state_frame),
+                                      "--out", os.path.join(a.out, "state_run.h5")])
     print("| setup_interval | age of P (frames) | rel. residual after 100 its, authors' metric | true metric | paper (270K, frame 99) |\n"
           "|---|---|---|---|---|")
-    for k in (1, 10, 20, 50, 100):
+    for k in a.intervals:
         out = os.path.join(a.out, f"interval_{k}.h5")
         if os.path.exists(out):
             os.remove(out)
@@ -138,6 +141,8 @@ def main():
                     help="squash: --set lists, one run each ('' = the profile as is)")
     ap.add_argument("--state-frame", type=int, default=2, help="setup_interval: the saved frame")
     ap.add_argument("--frames", type=int, default=3, help="setup_interval: frames run from the state")
+    ap.add_argument("--intervals", type=lambda s: [int(x) for x in s.split(",")], default=[1, 10, 20, 50, 100],
+                    help="setup_interval: the amg.setup_interval values, comma-separated")
     a = ap.parse_args()
     a.mesh = a.mesh or ("bunny:50k" if a.what == "near_kernel" else "bunny:12k")
     os.makedirs(a.out, exist_ok=True)
