@@ -21,12 +21,18 @@ void DualSystem::build_incidence() {
       if (p >= 0) ++inc_start_[p + 1];
   std::partial_sum(inc_start_.begin(), inc_start_.end(), inc_start_.begin());
   inc_.resize(inc_start_[n]);
+  slot_inc_.assign(4L * m, -1);
+  particles_.resize(m);
+  for (int j = 0; j < m; ++j) particles_[j] = prob.constraint_particles(j);
   {
     std::vector<int> fillpos(inc_start_.begin(), inc_start_.end() - 1);
     for (int j = 0; j < m; ++j) {
       const auto ps = prob.constraint_particles(j);
       for (int s = 0; s < 4; ++s)
-        if (ps[s] >= 0) inc_[fillpos[ps[s]]++] = {j, s};
+        if (ps[s] >= 0) {
+          slot_inc_[4 * j + s] = fillpos[ps[s]];
+          inc_[fillpos[ps[s]]++] = {j, s};
+        }
     }
   }
 }
@@ -36,95 +42,89 @@ void DualSystem::build_pattern() {
   const int m = prob.num_constraints();
   const Eigen::VectorXd& w = prob.particles.w;
 
-  // Per row: the coupled constraints and the (slot, slot) pairs of shared free particles.
-  // Rows are independent; build them in parallel into per-row buffers, then concatenate.
-  struct Entry {
-    int col;
-    std::uint8_t pair;
-  };
-  std::vector<std::vector<Entry>> row_entries(m);
+  // Per row: its free slots, its number of terms and its columns (the constraints at its free
+  // particles, and itself: the diagonal exists even with only pinned particles, A_ii = α̃).
+  std::vector<std::vector<int>> row_cols(m);
+  free_slots_.assign(m, 0);
+  term_start_.assign(m + 1, 0);
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < m; ++i) {
-    auto& es = row_entries[i];
+    auto& c = row_cols[i];
+    c.push_back(i);
     const auto ps = prob.constraint_particles(i);
     for (int a = 0; a < 4; ++a) {
       const int p = ps[a];
       if (p < 0 || w[p] == 0) continue;  // pinned particles couple nothing
-      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k)
-        es.push_back({inc_[k].constraint, static_cast<std::uint8_t>(a << 2 | inc_[k].slot)});
+      free_slots_[i] |= static_cast<std::uint8_t>(1 << a);
+      term_start_[i + 1] += inc_start_[p + 1] - inc_start_[p];
+      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) c.push_back(inc_[k].constraint);
     }
-    // The diagonal exists even for a constraint with only pinned particles (A_ii = α̃).
-    bool has_diag = false;
-    for (const auto& e : es) has_diag |= e.col == i;
-    if (!has_diag) es.push_back({i, 0xFF});
-    std::stable_sort(es.begin(), es.end(), [](const Entry& x, const Entry& y) { return x.col < y.col; });
+    std::sort(c.begin(), c.end());
+    c.erase(std::unique(c.begin(), c.end()), c.end());
   }
 
   std::vector<int> outer(m + 1, 0);
-  for (int i = 0; i < m; ++i) {
-    int cols = 0;
-    for (size_t k = 0; k < row_entries[i].size(); ++k)
-      if (k == 0 || row_entries[i][k].col != row_entries[i][k - 1].col) ++cols;
-    outer[i + 1] = outer[i] + cols;
-  }
+  for (int i = 0; i < m; ++i) outer[i + 1] = outer[i] + static_cast<int>(row_cols[i].size());
+  std::partial_sum(term_start_.begin(), term_start_.end(), term_start_.begin());
   const int nnz = outer[m];
   A_.resize(m, m);
   A_.resizeNonZeros(nnz);
   std::copy(outer.begin(), outer.end(), A_.outerIndexPtr());
-  pair_start_.assign(nnz + 1, 0);
   diag_.assign(m, -1);
-  std::vector<int> pair_count(nnz, 0);
+  term_pos_.resize(term_start_[m]);
   int* cols = A_.innerIndexPtr();
 #pragma omp parallel for schedule(dynamic, 256)
   for (int i = 0; i < m; ++i) {
-    int k = outer[i] - 1;
-    int prev = -1;
-    for (const auto& e : row_entries[i]) {
-      if (e.col != prev) {
-        cols[++k] = e.col;
-        prev = e.col;
-        if (e.col == i) diag_[i] = k;
-      }
-      if (e.pair != 0xFF) ++pair_count[k];
-    }
-  }
-  for (int k = 0; k < nnz; ++k) pair_start_[k + 1] = pair_start_[k] + pair_count[k];
-  pairs_.resize(pair_start_[nnz]);
-#pragma omp parallel for schedule(dynamic, 256)
-  for (int i = 0; i < m; ++i) {
-    int k = outer[i] - 1;
-    int prev = -1;
-    int pos = 0;
-    for (const auto& e : row_entries[i]) {
-      if (e.col != prev) {
-        ++k;
-        prev = e.col;
-        pos = pair_start_[k];
-      }
-      if (e.pair != 0xFF) pairs_[pos++] = e.pair;
-    }
+    const auto& c = row_cols[i];
+    std::copy(c.begin(), c.end(), cols + outer[i]);
+    const auto at = [&](int j) { return outer[i] + static_cast<int>(std::lower_bound(c.begin(), c.end(), j) - c.begin()); };
+    diag_[i] = at(i);
+    const auto ps = prob.constraint_particles(i);
+    int t = term_start_[i];
+    for (int a = 0; a < 4; ++a)
+      if (free_slots_[i] >> a & 1)
+        for (int k = inc_start_[ps[a]]; k < inc_start_[ps[a] + 1]; ++k) term_pos_[t++] = at(inc_[k].constraint) - outer[i];
   }
   std::fill(A_.valuePtr(), A_.valuePtr() + nnz, 0.0);
+  grad_at_.resize(inc_.size());
+}
+
+// Prefetches the gradient runs of row i's free particles (a row's runs are short, so the
+// hardware prefetcher does not catch them before they are read).
+void DualSystem::prefetch_row(int i) const {
+  for (int a = 0; a < 4; ++a)
+    if (free_slots_[i] >> a & 1) {
+      const int p = particles_[i][a];
+      const char* lo = reinterpret_cast<const char*>(grad_at_.data() + inc_start_[p]);
+      const char* hi = reinterpret_cast<const char*>(grad_at_.data() + inc_start_[p + 1]);
+      for (const char* c = lo; c < hi; c += 64) __builtin_prefetch(c);
+    }
 }
 
 void DualSystem::fill(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde) {
   const int m = rows();
   const int* outer = A_.outerIndexPtr();
-  const int* cols = A_.innerIndexPtr();
   double* val = A_.valuePtr();
   const Eigen::VectorXd& w = prob_.particles.w;
+  // The gradients into particle order: read in constraint order, written to each slot's incidence.
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j)
+    for (int a = 0; a < 4; ++a)
+      if (slot_inc_[4 * j + a] >= 0) grad_at_[slot_inc_[4 * j + a]] = s.grad[j][a];
+  // Row i in one pass: zero it, add each term in the order of its slots (so A_ij sums its shared
+  // particles in the same order for every fill), then α̃ on the diagonal.
+  constexpr int kAhead = 2;
 #pragma omp parallel for schedule(static)
   for (int i = 0; i < m; ++i) {
-    const auto ps = prob_.constraint_particles(i);
-    const auto& gi = s.grad[i];
-    for (int k = outer[i]; k < outer[i + 1]; ++k) {
-      const auto& gj = s.grad[cols[k]];
-      double v = 0;
-      for (int q = pair_start_[k]; q < pair_start_[k + 1]; ++q) {
-        const int a = pairs_[q] >> 2, b = pairs_[q] & 3;
-        v += w[ps[a]] * gi[a].dot(gj[b]);
-      }
-      val[k] = v;
+    if (i + kAhead < m) prefetch_row(i + kAhead);
+    double* row = val + outer[i];
+    std::fill(row, val + outer[i + 1], 0.0);
+    const int* pos = term_pos_.data() + term_start_[i];
+    for (int a = 0; a < 4; ++a) {
+      if (!(free_slots_[i] >> a & 1)) continue;
+      const int p = particles_[i][a];
+      const Eigen::Vector3d& ga = s.grad[i][a];
+      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) row[*pos++] += w[p] * ga.dot(grad_at_[k]);
     }
     val[diag_[i]] += alpha_tilde[i];
   }

@@ -1,14 +1,17 @@
 // The dual system of XPBD (Eq. 8 of the supplemental):
 //   A = ∇C M⁻¹ ∇Cᵀ + α̃,   b = −C − α̃λ,   Δx = M⁻¹ ∇Cᵀ Δλ.
 // The sparsity pattern depends only on topology: two constraints couple when they share a
-// particle that is not pinned (w = 0 couples nothing). It is built once; values are refilled
-// in parallel per row each outer iteration, from a precomputed list of shared particles per
-// non-zero.
+// particle that is not pinned (w = 0 couples nothing). It is built once, with a fill recipe:
+// row i gets w_p gᵢ,ₚ·gⱼ,ₚ from every constraint j at each of its free particles p, and the
+// recipe holds, per such term, the position of A_ij. Each fill first copies the gradients into
+// particle order (each particle's constraints contiguous, so a row reads four short runs instead
+// of gathering a gradient per non-zero), then writes each row in one pass (parallel over rows).
 #pragma once
 
 #include "problem.hpp"
 #include "../core/sparse.hpp"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -40,15 +43,22 @@ class DualSystem {
 
  private:
   void build_incidence();  // particle → (constraint, slot)
-  void build_pattern();    // A's pattern, the shared-particle pairs of each non-zero, the diagonals
+  void build_pattern();    // A's pattern, the diagonals, the fill recipe
+  void prefetch_row(int i) const;
 
   const Problem& prob_;
   SparseMatrix A_;
+  std::vector<std::array<int, 4>> particles_;  // per constraint, as prob.constraint_particles()
   std::vector<int> inc_start_;  // per particle, into inc_ (all particles, pinned included)
   std::vector<Incidence> inc_;
-  std::vector<int> pair_start_;            // per non-zero, into pairs_
-  std::vector<std::uint8_t> pairs_;        // (slot in row constraint) << 2 | (slot in column constraint)
   std::vector<int> diag_;                  // position of the diagonal in each row
+  // The fill recipe. Row i's terms, from term_start_[i]: for each free slot a of row i (bit a of
+  // free_slots_[i]) with particle p, one per incidence k of p, at position term_pos_ of A_ij.
+  std::vector<std::uint8_t> free_slots_;
+  std::vector<int> term_start_;
+  std::vector<int> term_pos_;              // relative to the row's first non-zero
+  std::vector<int> slot_inc_;              // per constraint j and slot a: its incidence k, −1 if none
+  std::vector<Eigen::Vector3d> grad_at_;   // per incidence k: the gradient of its constraint at its particle
 };
 
 }  // namespace xb

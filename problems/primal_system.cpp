@@ -130,9 +130,22 @@ void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tild
     if (!(alpha_tilde[j] > 0))
       throw Error("primal system: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
                   " (the primal form needs every alpha~ > 0)");
+  // One division per constraint, not nine per term: a term is (g_p g_qᵀ)·(1/α̃), in that order
+  // so that the blocks (p, q) and (q, p) stay exact transposes.
+  inv_alpha_.resize(alpha_tilde.size());
+#pragma omp parallel for schedule(static)
+  for (long j = 0; j < alpha_tilde.size(); ++j) inv_alpha_[j] = 1.0 / alpha_tilde[j];
   double* val = K_.valuePtr();
+  constexpr int kAhead = 2;
 #pragma omp parallel for schedule(static)
   for (int p = 0; p < nb; ++p) {
+    // The gradients of a later node row's constraints, whose loads would otherwise stall.
+    if (p + kAhead < nb)
+      for (int k = inc_start_[p + kAhead]; k < inc_start_[p + kAhead + 1]; ++k) {
+        const char* g = reinterpret_cast<const char*>(grad[inc_[k] >> 2].data());
+        __builtin_prefetch(g);
+        __builtin_prefetch(g + 64);
+      }
     const int nbp = block_start_[p + 1] - block_start_[p];
     for (int k = 0; k < nbp; ++k) {
       const int blk = block_start_[p] + k;
@@ -140,7 +153,7 @@ void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tild
       for (int t = term_start_[blk]; t < term_start_[blk + 1]; ++t) {
         const std::int64_t term = terms_[t];
         const int j = static_cast<int>(term >> 4), sp = (term >> 2) & 3, sq = term & 3;
-        B.noalias() += grad[j][sp] * grad[j][sq].transpose() / alpha_tilde[j];
+        B.noalias() += (grad[j][sp] * grad[j][sq].transpose()) * inv_alpha_[j];
       }
       if (block_col_[blk] == p) B.diagonal().array() += 1.0 / graph_.w[free_[p]];
       for (int r = 0; r < 3; ++r)

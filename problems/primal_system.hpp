@@ -86,6 +86,7 @@ class PrimalSystem {
   std::vector<int> block_col_;       // per block, its node column
   std::vector<int> term_start_;
   std::vector<std::int64_t> terms_;
+  Eigen::VectorXd inv_alpha_;        // 1/α̃ of the last fill
 };
 
 }  // namespace xb

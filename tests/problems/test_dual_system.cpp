@@ -100,3 +100,33 @@ TEST(DualSystem, PinnedParticlesCoupleNothing) {
   DualSystem ds2(prob);
   EXPECT_EQ(ds2.A().nonZeros(), 4);
 }
+
+TEST(DualSystem, RowOfPinnedParticlesIsAlphaAloneAndRefillsRepeat) {
+  // Constraint 0 joins two pinned particles: its row is α̃ alone. Constraint 1 has one free particle.
+  Problem prob;
+  prob.name = "pinned row";
+  prob.particles.x.resize(3, 3);
+  prob.particles.x << 0, 1, 2, 0, 0.5, 0, 0, 0, 0.3;
+  prob.particles.v = Eigen::Matrix3Xd::Zero(3, 3);
+  prob.particles.w = Eigen::Vector3d(0, 0, 0.5);
+  prob.distance.idx = {{0, 1}, {1, 2}};
+  prob.distance.rest_length = {1, 1};
+  prob.distance.compliance = {1e-3, 2e-3};
+  DualSystem ds(prob);
+  ConstraintState s;
+  evaluate_constraints(prob, prob.particles.x, s);
+  const Eigen::VectorXd at = Eigen::Vector2d(3.0, 5.0);
+  ds.fill(s, at);
+  ASSERT_EQ(ds.A().nonZeros(), 2);
+  const Eigen::MatrixXd A(ds.A());
+  EXPECT_EQ(A(0, 0), 3.0);
+  EXPECT_DOUBLE_EQ(A(1, 1), 0.5 * s.grad[1][1].squaredNorm() + 5.0);
+  // A fill overwrites every value: other gradients, then the first ones again, give the first A.
+  ConstraintState other = s;
+  for (auto& g : other.grad)
+    for (auto& v : g) v *= 3;
+  ds.fill(other, at);
+  EXPECT_NE(Eigen::MatrixXd(ds.A()), A);
+  ds.fill(s, at);
+  EXPECT_EQ(Eigen::MatrixXd(ds.A()), A);
+}

@@ -176,3 +176,16 @@ TEST(PrimalSystem, JacobianRoundTripsThroughCsr) {
   b.fill(grad, c.alpha_tilde);
   EXPECT_EQ((Eigen::MatrixXd(a.K()) - Eigen::MatrixXd(b.K())).cwiseAbs().maxCoeff(), 0.0);
 }
+
+TEST(PrimalSystem, KIsExactlySymmetricAndRefillsRepeat) {
+  const Case c = make_case("bar_hang", {{"resolution", "2"}, {"prestretch", "1.05"}});
+  PrimalSystem ps(constraint_graph(c.prob));
+  ps.fill(c.s.grad, c.alpha_tilde);
+  const Eigen::MatrixXd K(ps.K());
+  EXPECT_EQ(K, K.transpose());  // block (q, p) is block (p, q) transposed, bit for bit
+  Eigen::VectorXd other = 2 * c.alpha_tilde;
+  ps.fill(c.s.grad, other);
+  EXPECT_NE(Eigen::MatrixXd(ps.K()), K);
+  ps.fill(c.s.grad, c.alpha_tilde);
+  EXPECT_EQ(Eigen::MatrixXd(ps.K()), K);
+}
