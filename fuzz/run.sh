@@ -26,6 +26,8 @@ seed() {
     scene) cp problems/scenes/*.toml "$dir" ;;
     sweep) cp figures/*.toml "$dir" ;;
     system | results) cp fuzz/seeds/"$1"/* "$dir" ;;
+    # Edit lists (fuzz/h5_edits.hpp): each seed file as it is, and one edit of it.
+    system_struct | results_struct) printf '\0' >"$dir/seed0"; printf '\1' >"$dir/seed1"; printf '\0\0\0\0' >"$dir/edit" ;;
     *) echo "fuzz: unknown target '$1'" >&2; exit 2 ;;
   esac
   # Earlier findings in this reader replay first: each must now end in a clear error. Those in
@@ -51,7 +53,8 @@ hdf5_run() {
     echo "fuzz: $t: stopped after $((seconds + 120)) s (libFuzzer hung)"
   compgen -G "$build/findings/$t/[clot]*-*" >/dev/null || return 0
   bash fuzz/triage.sh "$build" "$t" >"$build/$t.triage"
-  echo "fuzz: $t: $(grep -c $'\tlibhdf5\t' "$build/$t.triage") finding(s) inside libhdf5 (list: $build/$t.triage)"
+  echo "fuzz: $t: $(grep -c $'\tlibhdf5\t' "$build/$t.triage") finding(s) inside libhdf5, $(grep -c $'\tno report\t' "$build/$t.triage")" \
+    "saved without a report that rerun cleanly (list: $build/$t.triage)"
   ! grep -q $'\tours\t' "$build/$t.triage"
 }
 
