@@ -84,8 +84,7 @@ bool read_values(hid_t f, const std::string& p, Values& v) {
   const hssize_t n = H5Sget_simple_extent_npoints(s);
   if ((c != H5T_INTEGER && c != H5T_FLOAT) || H5Sget_simple_extent_ndims(s) != 1 || n < 0 || n > 100000) return false;
   v.integer = c == H5T_INTEGER;
-  if (v.integer) v.i.resize(n);
-  else v.d.resize(n);
+  (v.integer ? v.i.resize(n) : v.d.resize(n));
   void* buf = v.integer ? static_cast<void*>(v.i.data()) : v.d.data();
   return n == 0 || H5Dread(ds, v.integer ? H5T_NATIVE_LLONG : H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0;
 }
@@ -162,15 +161,12 @@ hid_t make_type(FuzzedDataProvider& in) {
     }
     case 9: {
       const hid_t t = H5Tcreate(H5T_COMPOUND, 16);
-      H5Tinsert(t, "a", 0, H5T_NATIVE_DOUBLE);
-      H5Tinsert(t, "b", 8, H5T_NATIVE_LLONG);
-      return t;
+      return H5Tinsert(t, "a", 0, H5T_NATIVE_DOUBLE), H5Tinsert(t, "b", 8, H5T_NATIVE_LLONG), t;
     }
     case 10: {
       const hid_t t = H5Tenum_create(H5T_NATIVE_INT);
-      const int zero = 0, one = 1;
-      H5Tenum_insert(t, "no", &zero);
-      H5Tenum_insert(t, "yes", &one);
+      const int values[2] = {0, 1};
+      for (int k = 0; k < 2; ++k) H5Tenum_insert(t, k ? "yes" : "no", &values[k]);
       return t;
     }
     case 11: {
@@ -336,10 +332,7 @@ struct Editor {
       case 2: H5Lcreate_hard(f, q.c_str(), f, p.c_str(), lcpl, H5P_DEFAULT); return;
       case 3: H5Lcreate_external("missing.h5", "/x", f, p.c_str(), lcpl, H5P_DEFAULT); return;
       case 4: H5Gclose(H5Gcreate2(f, p.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT)); return;
-      default: {
-        H t(H5Tcopy(H5T_NATIVE_INT), H5Tclose);
-        H5Tcommit2(f, p.c_str(), t, lcpl, H5P_DEFAULT, H5P_DEFAULT);
-      }
+      default: H5Tcommit2(f, p.c_str(), H(H5Tcopy(H5T_NATIVE_INT), H5Tclose), lcpl, H5P_DEFAULT, H5P_DEFAULT);
     }
   }
   // Copies the object at q (a run, a matrix group) to new names: many runs, repeated members.
