@@ -12,7 +12,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -258,8 +257,11 @@ void new_dataset(FuzzedDataProvider& in, hid_t f, const std::string& p, hsize_t 
   const int layout = huge ? 2 : in.ConsumeIntegralInRange(0, 3);
   const int rank = H5Sget_simple_extent_ndims(space);
   if (layout == 1) H5Pset_layout(dcpl, H5D_COMPACT);
-  if (layout >= 2 && rank > 0) {
-    const hsize_t chunk[3] = {64, 4, 4};
+  if (layout >= 2 && rank > 0) {  // chunks of up to 64 values a dimension, any extent allowed
+    hsize_t dims[3], chunk[3], max[3] = {H5S_UNLIMITED, H5S_UNLIMITED, H5S_UNLIMITED};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    for (int k = 0; k < rank; ++k) chunk[k] = std::clamp<hsize_t>(dims[k], 1, 64);
+    H5Sset_extent_simple(space, rank, dims, max);
     H5Pset_chunk(dcpl, rank, chunk);
     if (layout == 3) H5Pset_deflate(dcpl, 6);
   }
