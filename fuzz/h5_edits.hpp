@@ -15,6 +15,7 @@ namespace xb_fuzz {
 // Builds work_dir()/file from `seed_dir`'s seeds and the edits the bytes decode to; `names` are
 // names the reader looks for (tried alongside those already in the file). Returns the path.
 // With XB_FUZZ_KEEP=PATH set, the built file is also copied to PATH (a finding's corpus case).
+// "" when libhdf5 could not close the edited file (the input is then not read).
 std::string build_h5(const std::string& seed_dir, const std::string& file, const std::vector<std::string>& names,
                      const uint8_t* data, size_t size);
 
