@@ -50,7 +50,7 @@ test-asan: setup
 # FUZZ_TARGETS picks some. A finding stops it, with the input under build-fuzz/findings/.
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS ?= tetgen gmsh medit scene sweep system results
+FUZZ_TARGETS ?= tetgen gmsh medit scene sweep system results system_struct results_struct
 fuzz: setup
 	@cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
 	  -DCMAKE_BUILD_TYPE=Sanitize -DXB_FUZZ=ON -DXB_WITH_HYPRE=OFF -DXB_WITH_MUELU=OFF >/dev/null

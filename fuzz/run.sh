@@ -26,6 +26,8 @@ seed() {
     scene) cp problems/scenes/*.toml "$dir" ;;
     sweep) cp figures/*.toml "$dir" ;;
     system | results) cp fuzz/seeds/"$1"/* "$dir" ;;
+    # Edit lists (fuzz/h5_edits.hpp): each seed file as it is, and one edit of it.
+    system_struct | results_struct) printf '\0' >"$dir/seed0"; printf '\1' >"$dir/seed1"; printf '\0\0\0\0' >"$dir/edit" ;;
     *) echo "fuzz: unknown target '$1'" >&2; exit 2 ;;
   esac
   # Earlier findings in this reader replay first: each must now end in a clear error. Those in
@@ -37,6 +39,11 @@ seed() {
 # what MPI_Init allocated past MPI_Finalize: LeakSanitizer would report it at exit (libFuzzer's
 # -detect_leaks covers its per-input check only, ASAN_OPTIONS the one at exit).
 leaks() { case $1 in sweep) echo 0 ;; *) echo 1 ;; esac; }
+
+# An edit list (fuzz/h5_edits.hpp) is short, and one of a few bytes makes one or two edits: the
+# *_struct targets take inputs of any length up to 256 bytes from the start (libFuzzer's length
+# control would keep them to a few bytes for most of a run at ~10-60 executions a second).
+len_flags() { case $1 in *_struct) echo "-max_len=256 -len_control=0" ;; *) echo "-max_len=4096" ;; esac; }
 
 # libhdf5 1.10 itself crashes on many corrupt files (fuzz/README.md): the HDF5 targets run in fork
 # mode past crashes, and only a finding that triage.sh puts on our side fails.
@@ -51,7 +58,8 @@ hdf5_run() {
     echo "fuzz: $t: stopped after $((seconds + 120)) s (libFuzzer hung)"
   compgen -G "$build/findings/$t/[clot]*-*" >/dev/null || return 0
   bash fuzz/triage.sh "$build" "$t" >"$build/$t.triage"
-  echo "fuzz: $t: $(grep -c $'\tlibhdf5\t' "$build/$t.triage") finding(s) inside libhdf5 (list: $build/$t.triage)"
+  echo "fuzz: $t: $(grep -c $'\tlibhdf5\t' "$build/$t.triage") finding(s) inside libhdf5, $(grep -c $'\tno report\t' "$build/$t.triage")" \
+    "saved without a report that rerun cleanly (list: $build/$t.triage)"
   ! grep -q $'\tours\t' "$build/$t.triage"
 }
 
@@ -62,7 +70,7 @@ for t in "$@"; do
   case $t in
     system | results) hdf5_run "$t" || { grep $'\tours\t' "$build/$t.triage"; echo "fuzz: $t: FINDING in our reader"; exit 1; } ;;
     *) ASAN_OPTIONS=detect_leaks=$(leaks "$t") "$build/fuzz/${t}_fuzz" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=2048 \
-         -max_len=4096 -detect_leaks="$(leaks "$t")" -print_final_stats=1 -artifact_prefix="$build/findings/$t/" \
+         $(len_flags "$t") -detect_leaks="$(leaks "$t")" -print_final_stats=1 -artifact_prefix="$build/findings/$t/" \
          "$build/corpus/$t" "$build/seeds/$t" >"$build/$t.log" 2>&1 ||
          { tail -60 "$build/$t.log"; echo "fuzz: $t: FINDING (input under $build/findings/$t/)"; exit 1; } ;;
   esac

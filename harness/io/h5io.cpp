@@ -86,6 +86,22 @@ hssize_t extent(hid_t space, const std::string& where, bool attribute) {
   return n;
 }
 
+// The file must hold a dataset's values before they are allocated: a huge declared extent over
+// chunks never written (or an unallocated contiguous dataset) would otherwise ask for gigabytes
+// from a file of kilobytes. Our writers store every value; with a filter (compression), up to
+// 1100 bytes per stored byte are allowed (deflate's limit is about 1032:1).
+void check_stored(hid_t ds, hid_t type, hssize_t n, const std::string& where) {
+  if (n == 0) return;
+  H dcpl(H5Dget_create_plist(ds), H5Pclose);
+  const int filters = dcpl < 0 ? -1 : H5Pget_nfilters(dcpl);
+  if (filters < 0) throw Error(where + ": cannot read its storage properties");
+  const double declared = static_cast<double>(n) * static_cast<double>(H5Tget_size(type));
+  const double stored = static_cast<double>(H5Dget_storage_size(ds));
+  if (declared > stored * (filters == 0 ? 1 : 1100))
+    throw Error(where + ": declares " + std::to_string(n) + " values (" + std::to_string(static_cast<long long>(declared)) +
+                " bytes) but the file stores only " + std::to_string(static_cast<long long>(stored)) + " bytes of them");
+}
+
 // Fixed-length string values of `size` bytes each, NUL-padded or not: each to its first NUL.
 std::vector<std::string> split_fixed(const std::vector<char>& buf, size_t size, hssize_t n) {
   std::vector<std::string> out;
@@ -166,6 +182,7 @@ DataValue read_dataset(hid_t ds, const std::string& where) {
   if (t < 0) throw Error(where + ": cannot read its type");
   H space(H5Dget_space(ds), H5Sclose);
   const hssize_t n = extent(space, where, false);
+  check_stored(ds, t, n, where);
   auto read = [&](hid_t mt, void* buf) { return n ? H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) : herr_t{0}; };
   switch (H5Tget_class(t)) {
     case H5T_INTEGER: {

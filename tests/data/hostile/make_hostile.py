@@ -166,6 +166,10 @@ def system_corpus():
     system("b_empty.h5", replace("b", np.zeros(0)))
     system("b_scalar.h5", replace("b", np.float64(1.0)))
     system("b_huge_extent.h5", lambda f: (f.__delitem__("b"), f.create_dataset("b", shape=(1 << 40,), dtype="f8", chunks=(1024,))))
+    # Declared extents the file does not store (found by fuzzing): read, they would be allocated in full.
+    system("J_indptr_unwritten_chunks.h5", lambda f: (f.__delitem__("J/indptr"),
+                                                      f.create_dataset("J/indptr", shape=(1 << 27,), dtype="i1", chunks=(64,))))
+    system("b_unwritten.h5", lambda f: (f.__delitem__("b"), f.create_dataset("b", shape=(1 << 28,), dtype="f8")))
     system("A_is_dataset.h5", lambda f: (f.__delitem__("A"), f.create_dataset("A", data=np.eye(4))))
     system("A_dangling.h5", lambda f: (f.__delitem__("A"), f.__setitem__("A", h5py.SoftLink("/Z"))))
     system("kind_missing.h5", lambda f: f.attrs.__delitem__("kind"))

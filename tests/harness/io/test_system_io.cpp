@@ -28,6 +28,24 @@ void poke(const std::string& file, const char* name, hsize_t index, long long va
   H5Fclose(f);
 }
 
+// Replaces /b by a chunked dataset of n doubles, deflated; `values` written unless empty.
+void replace_b(const std::string& file, hsize_t n, const Vector& values) {
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  EXPECT_GE(H5Ldelete(f, "/b", H5P_DEFAULT), 0);
+  const hid_t space = H5Screate_simple(1, &n, nullptr);
+  const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  const hsize_t chunk = 16;
+  H5Pset_chunk(dcpl, 1, &chunk);
+  H5Pset_deflate(dcpl, 6);
+  const hid_t ds = H5Dcreate2(f, "/b", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  if (values.size()) EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  H5Dclose(ds);
+  H5Pclose(dcpl);
+  H5Sclose(space);
+  H5Fclose(f);
+}
+
 void expect_error(const std::string& file, const std::string& fragment) {
   try {
     read_system_h5(file);
@@ -51,6 +69,19 @@ TEST(SystemIo, RowPointerPastTheArraysIsNamed) {
   ASSERT_EQ(cmd_capture({"--scene", "cloth_hang", "--set", "resolution=4", "--frame", "0", "--iteration", "0", "--out", prefix}), 0);
   poke(prefix + ".h5", "/J/indptr", 2, 1LL << 40);
   expect_error(prefix + ".h5", "/J/indptr is not non-decreasing");
+}
+
+// Values are allocated only when the file stores them: a compressed /b reads back, a declared
+// extent over chunks never written is refused before its gigabytes are allocated.
+TEST(SystemIo, DeclaredValuesMustBeStored) {
+  TempDir dir;
+  const std::string prefix = dir / "sys";
+  ASSERT_EQ(cmd_capture({"--scene", "cloth_hang", "--set", "resolution=3", "--frame", "0", "--iteration", "0", "--out", prefix}), 0);
+  const CapturedSystem good = read_system_h5(prefix + ".h5");
+  replace_b(prefix + ".h5", good.b.size(), good.b);
+  EXPECT_EQ(read_system_h5(prefix + ".h5").b, good.b);
+  replace_b(prefix + ".h5", hsize_t{1} << 28, Vector());
+  expect_error(prefix + ".h5", "/b: declares 268435456 values (2147483648 bytes) but the file stores only 0 bytes");
 }
 
 TEST(SystemIo, JacobianRowWithMoreThanFourParticlesIsRefused) {
