@@ -19,31 +19,9 @@ void row_block(const int* outer, int n, int t, int T, int& lo, int& hi) {
 }
 
 namespace {
-// Σ_k val[k]·x[cols[k]] over row i.
-inline double row_dot(const int* outer, const int* cols, const double* val, const double* x, int i) {
-  double s = 0;
-  for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * x[cols[k]];
-  return s;
-}
-}  // namespace
-
-void spmv(const SparseMatrix& A, const Vector& x, Vector& y) {
-  const int n = static_cast<int>(A.rows());
-  const int* __restrict outer = A.outerIndexPtr();
-  const int* __restrict cols = A.innerIndexPtr();
-  const double* __restrict val = A.valuePtr();
-  y.resize(n);
-  const double* __restrict xp = x.data();
-  double* __restrict yp = y.data();
-#pragma omp parallel
-  {
-    int lo, hi;
-    row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
-    for (int i = lo; i < hi; ++i) yp[i] = row_dot(outer, cols, val, xp, i);
-  }
-}
-
-double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) {
+// y = A x, and (Dot) x·y in the same pass.
+template <bool Dot>
+double spmv_impl(const SparseMatrix& A, const Vector& x, Vector& y) {
   const int n = static_cast<int>(A.rows());
   const int* __restrict outer = A.outerIndexPtr();
   const int* __restrict cols = A.innerIndexPtr();
@@ -58,11 +36,16 @@ double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) {
     row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
     for (int i = lo; i < hi; ++i) {
       yp[i] = row_dot(outer, cols, val, xp, i);
-      xy += xp[i] * yp[i];
+      if constexpr (Dot) xy += xp[i] * yp[i];
     }
   }
   return xy;
 }
+}  // namespace
+
+void spmv(const SparseMatrix& A, const Vector& x, Vector& y) { spmv_impl<false>(A, x, y); }
+
+double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) { return spmv_impl<true>(A, x, y); }
 
 void residual(const SparseMatrix& A, const Vector& x, const Vector& b, Vector& r) {
   const int n = static_cast<int>(A.rows());

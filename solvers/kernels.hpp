@@ -12,6 +12,15 @@ namespace xb {
 // holding about nnz/T non-zeros each.
 void row_block(const int* outer, int n, int t, int T, int& lo, int& hi);
 
+// Σ_k val[k]·x[cols[k]] over row i, summed in the storage precision S (the float V-cycle's rows of
+// ~10–100 terms are accurate to ~1e-6, as a preconditioner needs, with no conversion per non-zero).
+template <class S>
+inline S row_dot(const int* outer, const int* cols, const S* val, const S* x, int i) {
+  S s = 0;
+  for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * x[cols[k]];
+  return s;
+}
+
 // y = A x
 void spmv(const SparseMatrix& A, const Vector& x, Vector& y);
 // y = A x, returning x·y (PCG's A p and pᵀA p in one pass).

@@ -7,17 +7,6 @@
 
 namespace xb::amg {
 
-namespace {
-// Σ_k A_ik x_k in the storage precision (float sums of a row's ~10–100 terms are accurate to
-// ~1e-6, as a preconditioner needs; no conversion per non-zero).
-template <class S>
-inline S row_dot(const int* outer, const int* cols, const S* val, const S* x, int i) {
-  S s = 0;
-  for (int k = outer[i]; k < outer[i + 1]; ++k) s += val[k] * x[cols[k]];
-  return s;
-}
-}  // namespace
-
 template <class S>
 void DiagonalRelaxation<S>::step(const CsrOf<S>& A, const VectorOf<S>& b, const VectorOf<S>& x, double c1,
                                  double c2) {
