@@ -126,15 +126,15 @@ void PrimalSystem::build_pattern() {
 
 void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde) {
   const int nb = static_cast<int>(free_.size());
-  for (long j = 0; j < alpha_tilde.size(); ++j)
-    if (!(alpha_tilde[j] > 0))
-      throw Error("primal system: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
-                  " (the primal form needs every alpha~ > 0)");
   // One division per constraint, not nine per term: a term is (g_p g_qᵀ)·(1/α̃), in that order
   // so that the blocks (p, q) and (q, p) stay exact transposes.
   inv_alpha_.resize(alpha_tilde.size());
-#pragma omp parallel for schedule(static)
-  for (long j = 0; j < alpha_tilde.size(); ++j) inv_alpha_[j] = 1.0 / alpha_tilde[j];
+  for (long j = 0; j < alpha_tilde.size(); ++j) {
+    if (!(alpha_tilde[j] > 0))
+      throw Error("primal system: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
+                  " (the primal form needs every alpha~ > 0)");
+    inv_alpha_[j] = 1.0 / alpha_tilde[j];
+  }
   double* val = K_.valuePtr();
   constexpr int kAhead = 2;
 #pragma omp parallel for schedule(static)

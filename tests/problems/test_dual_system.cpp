@@ -55,6 +55,22 @@ void check_against_dense(Problem prob, double dt) {
   const Eigen::VectorXd ref = minv.asDiagonal() * (J.transpose() * y);
   EXPECT_LE((Eigen::Map<const Eigen::VectorXd>(dx.data(), dx.size()) - ref).norm(), 1e-12 * ref.norm());
 }
+
+// Three particles at (x_i, y_i, z_i) with inverse masses w, joined by two unit-length distance
+// constraints (0–1, 1–2) of compliance c01 and c12.
+Problem chain3(const Eigen::Vector3d& x, const Eigen::Vector3d& y, const Eigen::Vector3d& z, const Eigen::Vector3d& w,
+               double c01, double c12) {
+  Problem prob;
+  prob.name = "chain of three";
+  prob.particles.x.resize(3, 3);
+  prob.particles.x << x.transpose(), y.transpose(), z.transpose();
+  prob.particles.v = Eigen::Matrix3Xd::Zero(3, 3);
+  prob.particles.w = w;
+  prob.distance.idx = {{0, 1}, {1, 2}};
+  prob.distance.rest_length = {1, 1};
+  prob.distance.compliance = {c01, c12};
+  return prob;
+}
 }  // namespace
 
 TEST(DualSystem, ClothMatchesDenseWithPins) {
@@ -85,15 +101,8 @@ TEST(DualSystem, TetBarMatchesDenseWithPinsAndMassRatio) {
 
 TEST(DualSystem, PinnedParticlesCoupleNothing) {
   // Two distance constraints sharing only a pinned particle are not coupled.
-  Problem prob;
-  prob.name = "pin";
-  prob.particles.x.resize(3, 3);
-  prob.particles.x << 0, 1, 2, 0, 0, 0, 0, 0, 0;
-  prob.particles.v = Eigen::Matrix3Xd::Zero(3, 3);
-  prob.particles.w = Eigen::Vector3d(1, 0, 1);
-  prob.distance.idx = {{0, 1}, {1, 2}};
-  prob.distance.rest_length = {1, 1};
-  prob.distance.compliance = {0, 0};
+  Problem prob =
+      chain3(Eigen::Vector3d(0, 1, 2), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 1), 0, 0);
   DualSystem ds(prob);
   EXPECT_EQ(ds.A().nonZeros(), 2);
   prob.particles.w[1] = 1;
@@ -103,15 +112,8 @@ TEST(DualSystem, PinnedParticlesCoupleNothing) {
 
 TEST(DualSystem, RowOfPinnedParticlesIsAlphaAloneAndRefillsRepeat) {
   // Constraint 0 joins two pinned particles: its row is α̃ alone. Constraint 1 has one free particle.
-  Problem prob;
-  prob.name = "pinned row";
-  prob.particles.x.resize(3, 3);
-  prob.particles.x << 0, 1, 2, 0, 0.5, 0, 0, 0, 0.3;
-  prob.particles.v = Eigen::Matrix3Xd::Zero(3, 3);
-  prob.particles.w = Eigen::Vector3d(0, 0, 0.5);
-  prob.distance.idx = {{0, 1}, {1, 2}};
-  prob.distance.rest_length = {1, 1};
-  prob.distance.compliance = {1e-3, 2e-3};
+  const Problem prob = chain3(Eigen::Vector3d(0, 1, 2), Eigen::Vector3d(0, 0.5, 0), Eigen::Vector3d(0, 0, 0.3),
+                              Eigen::Vector3d(0, 0, 0.5), 1e-3, 2e-3);
   DualSystem ds(prob);
   ConstraintState s;
   evaluate_constraints(prob, prob.particles.x, s);
