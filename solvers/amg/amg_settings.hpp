@@ -16,13 +16,15 @@ struct AmgSettings {
   std::string jacobi_omega = "per_level";  // per_level | level0 (lambda_max of level 0 on every level)
   int near_kernel_sweeps = 20;
   int near_kernel_vectors = 1;
+  int near_kernel_extra = 0;  // rigid: relaxed random vectors appended to the rigid modes
   std::string prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
   double nodal_strength_threshold = 0.0;         // block systems (primal K), level 0
   double coarse_nodal_strength_threshold = 0.1;  // levels >= 1 (< 0: the level-0 value)
   double min_coarsening = 4;  // levels >= 1: fewer nodes per aggregate than this → redone at theta 0
   std::string prolongator_diagonal = "scalar";   // D of the smoothed P: scalar | block
   std::string smoother = "auto";  // auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
-  int smoother_sweeps = 0;        // 0: auto (1 dual, 2 primal)
+  int smoother_sweeps = 0;        // 0: auto (1)
+  int chebyshev_degree = 0;       // 0: auto (3 dual, the authors'; 4 primal)
   int setup_interval = 20;        // frames between rebuilds of aggregates and P
   int max_coarse = 400;
   int max_levels = 10;

@@ -15,6 +15,7 @@ AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   o.near_kernel.kind = p.amg.near_kernel;
   o.near_kernel.sweeps = p.amg.near_kernel_sweeps;
   o.near_kernel.vectors = p.amg.near_kernel_vectors;
+  o.near_kernel.extra = p.amg.near_kernel_extra;
   o.near_kernel.seed = static_cast<unsigned>(p.seed);
   o.prolongator = p.amg.prolongator;
   o.nodal_strength_threshold = p.amg.nodal_strength_threshold;
@@ -23,6 +24,7 @@ AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   o.prolongator_diagonal = p.amg.prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
   o.smoother.kind = p.amg.smoother;
   o.smoother.sweeps = p.amg.smoother_sweeps;
+  o.smoother.degree = p.amg.chebyshev_degree;
   o.smoother.seed = static_cast<unsigned>(p.seed);
   o.max_coarse = p.amg.max_coarse;
   o.max_levels = p.amg.max_levels;
@@ -55,6 +57,7 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
   check_option_names(opt);
   if (info.block_size < 1) throw Error("mgpbd: block size must be >= 1");
   if (opt.smoother.sweeps < 0) throw Error("amg.smoother_sweeps must be >= 0 (0: auto)");
+  if (opt.smoother.degree < 0) throw Error("amg.chebyshev_degree must be >= 0 (0: auto)");
   AmgOptions o = opt;
   const bool block = info.block_size > 1;
   if (o.near_kernel.kind == "auto") o.near_kernel.kind = block && info.near_kernel ? "rigid" : "ones";
@@ -65,6 +68,7 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
   if (o.jacobi_omega == "level0" && o.smoother.kind != "jacobi" && o.smoother.kind != "chebyshev")
     throw Error("amg.jacobi_omega=level0 needs amg.smoother jacobi or chebyshev (the smoother is " + o.smoother.kind + ")");
   if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
+  if (o.smoother.degree == 0) o.smoother.degree = block ? kBlockChebyshevDegree : 3;
   if (o.precision == "single" && (o.smoother.kind == "gs" || o.smoother.kind == "block_gs"))
     throw Error("amg.precision=single runs the polynomial smoothers (jacobi, chebyshev, block_jacobi, block_chebyshev), not amg.smoother=" +
                 o.smoother.kind);

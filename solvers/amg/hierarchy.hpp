@@ -53,7 +53,7 @@ struct AmgOptions {
   std::string prolongator = "auto";   // auto (smoothed on block systems, else tentative) | tentative | smoothed
   JacobiDiagonal prolongator_diagonal = JacobiDiagonal::Scalar;  // D of the smoothed P
   // kind "auto": kBlockSmoother on a block system, else chebyshev; sweeps 0: kBlockSmootherSweeps
-  // on a block system, else 1.
+  // on a block system, else 1; degree 0: kBlockChebyshevDegree on a block system, else 3.
   SmootherOptions smoother;
   int max_coarse = 400;
   int max_levels = 10;
@@ -64,18 +64,20 @@ struct AmgOptions {
   std::string precision = "double";
   // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
   // amg.coarse_nodal_strength_threshold, amg.aggregation, amg.near_kernel*, amg.prolongator,
-  // amg.prolongator_diagonal, amg.smoother*, amg.max_coarse, amg.max_levels, amg.coarse_solver,
+  // amg.prolongator_diagonal, amg.smoother*, amg.chebyshev_degree, amg.max_coarse, amg.max_levels, amg.coarse_solver,
   // amg.jacobi_omega, amg.precision, seed).
   static AmgOptions from_settings(const SolverSettings& p);
 };
 
-// What amg.smoother = auto and amg.smoother_sweeps = 0 take on block systems (the primal form):
-// degree-3 Chebyshev in D_block⁻¹A, two sweeps. Measured on bar_hang prestretched 5% (the hard,
-// nearly volume-preserving state), resolution 4/8/12/16: 39/34/44/39 PCG iterations, against
-// 67/63/85/77 for the scalar Chebyshev (1 sweep), 53/47/63/56 for one block sweep and
-// 58/50/68/62 for two block Gauss–Seidel sweeps (block_gs is cheaper per sweep but weaker).
+// What amg.smoother = auto, amg.smoother_sweeps = 0 and amg.chebyshev_degree = 0 take on block
+// systems (the primal form): one sweep of a degree-4 Chebyshev in D_block⁻¹A, the least passes
+// over K per decade of residual among the variants measured on the captured systems
+// (docs/primal_form.md, "Smoother cost per digit"): four passes before and after where degree 3
+// × 2 made six for 0–30% fewer iterations. The block diagonal matters on the stretched bar:
+// scalar Chebyshev needed about twice the iterations, block Gauss–Seidel 1.5×.
 inline constexpr const char* kBlockSmoother = "block_chebyshev";
-inline constexpr int kBlockSmootherSweeps = 2;
+inline constexpr int kBlockSmootherSweeps = 1;
+inline constexpr int kBlockChebyshevDegree = 4;
 
 // What the caller knows about the matrix beyond its entries (SetupContext's fields).
 struct MatrixInfo {

@@ -88,9 +88,8 @@ void DiagonalRelaxation<S>::presmooth(const CsrOf<S>& A, const VectorOf<S>& b, V
       add_d(zero);
       continue;
     }
-    // Degree-3 Chebyshev for D⁻¹A on [λ/30, 1.1λ] (Saad, Alg. 12.1): a fixed polynomial of D⁻¹A,
-    // the same before and after, hence a symmetric V-cycle.
-    constexpr int kDegree = 3;
+    // Chebyshev of `degree` (3: the authors') for D⁻¹A on [λ/30, 1.1λ] (Saad, Alg. 12.1): a fixed
+    // polynomial of D⁻¹A, the same before and after, hence a symmetric V-cycle.
     const double hi = 1.1 * lambda, lo = lambda / 30.0;
     const double theta = 0.5 * (hi + lo), delta = 0.5 * (hi - lo), sigma = theta / delta;
     double rho = 1.0 / sigma;
@@ -98,7 +97,7 @@ void DiagonalRelaxation<S>::presmooth(const CsrOf<S>& A, const VectorOf<S>& b, V
     else step(A, b, x, 0.0, 1.0 / theta);
     for (int k = 1;; ++k) {
       add_d(zero && k == 1);
-      if (k == kDegree) break;
+      if (k == degree) break;
       const double rho_new = 1.0 / (2.0 * sigma - rho);
       step(A, b, x, rho_new * rho, 2.0 * rho_new / delta);
       rho = rho_new;
@@ -110,6 +109,7 @@ DiagonalRelaxation<float> to_single(const DiagonalRelaxation<double>& r) {
   DiagonalRelaxation<float> f;
   f.chebyshev = r.chebyshev;
   f.sweeps = r.sweeps;
+  f.degree = r.degree;
   f.lambda = r.lambda;
   f.inv_diag = r.inv_diag.cast<float>();
   f.node_start = r.node_start;

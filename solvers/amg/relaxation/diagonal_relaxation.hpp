@@ -20,6 +20,7 @@ template <class S>
 struct DiagonalRelaxation {
   bool chebyshev = true;  // false: jacobi
   int sweeps = 1;
+  int degree = 3;         // chebyshev: the polynomial's degree (passes over A per sweep)
   double lambda = 0;      // the λ_max(D⁻¹A) estimate
   // D⁻¹: the scalar inverse diagonal, or (node_start not empty) row-major node blocks, node I's
   // at block_inv[offset[I]].

@@ -3,7 +3,7 @@
 //  jacobi:    x += ω D⁻¹(b − Ax), ω = 1/λ_max(D⁻¹A) (the authors' 2/(λ_max+λ_min) with
 //             λ_min = λ_max). A fixed ω such as 0.72 diverges on XPBD matrices, where
 //             ρ(D⁻¹A) reaches 4–11 (shared/paper/xpbd_matrix_facts.md), so λ_max is estimated.
-//  chebyshev: degree-3 Chebyshev polynomial in D⁻¹A on [ρ/30, 1.1ρ] (the authors' cloth setting),
+//  chebyshev: Chebyshev polynomial in D⁻¹A on [ρ/30, 1.1ρ] (the authors' cloth setting, degree 3),
 //             ρ estimated per level (the authors reuse level 0's; per level is cheap and safer).
 //  gs:        multicolour Gauss–Seidel, forward sweeps before, backward sweeps after.
 //  block_gs, block_jacobi, block_chebyshev: the same with D the node blocks of a block system
@@ -67,6 +67,7 @@ class Smoother {
 struct SmootherOptions {
   std::string kind = "chebyshev";  // jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
   int sweeps = 1;
+  int degree = 3;                     // chebyshev, block_chebyshev
   int power_iterations = 20;          // Lanczos steps at setup
   int refresh_power_iterations = 10;  // Lanczos steps at refresh
   unsigned seed = 1;
@@ -89,6 +90,7 @@ class PolynomialSmoother : public Smoother {
   explicit PolynomialSmoother(const SmootherOptions& opt, bool chebyshev) : opt_(opt) {
     relax_.chebyshev = chebyshev;
     relax_.sweeps = opt.sweeps;
+    relax_.degree = opt.degree;
   }
   // Throws naming amg.smoother when λ_max is not a positive number (A not positive definite).
   void check_lambda(const SparseMatrix& A) const;

@@ -133,7 +133,8 @@ namespace {
 // further, equals Eigen's LDLᵀ solution, on the prestretched bar and on the cloth.
 TEST(AmgBlockGs, MgpbdWithBlockSmoothersEqualsADirectSolve) {
   const PrimalCase cloth = primal_case("cloth_hang", {{"resolution", "16"}}, 3, 0);
-  // Iteration caps: measured bar 42 (block_gs), 28 (block_chebyshev), 90 (block_jacobi); cloth 8, 8, 12.
+  // Iteration caps (two sweeps each): measured bar 42 (block_gs), 28 (block_chebyshev, degree 4),
+  // 90 (block_jacobi); cloth 8, 8, 12.
   for (const auto& [c, caps] : {std::pair<const PrimalCase*, std::array<int, 3>>{&bar(), {55, 36, 115}},
                                 {&cloth, {14, 14, 20}}}) {
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Eigen::SparseMatrix<double>(c->K));
@@ -145,6 +146,7 @@ TEST(AmgBlockGs, MgpbdWithBlockSmoothersEqualsADirectSolve) {
       p.linear.tol = 1e-8;
       p.linear.max_iterations = 5000;
       p.amg.smoother = sm;
+      p.amg.smoother_sweeps = 2;
       Vector x, r;
       const LinearStats st = solve_k(*c, p, "mgpbd", x);
       const std::string what = sm + " on " + std::to_string(c->K.rows()) + " rows: " + std::to_string(st.iterations);
@@ -160,10 +162,11 @@ TEST(AmgBlockGs, MgpbdWithBlockSmoothersEqualsADirectSolve) {
   }
 }
 
-// The primal defaults (block Chebyshev, 2 sweeps) on the prestretched bar, stopping on the dual
+// The primal defaults (block Chebyshev of degree 4, 1 sweep) on the prestretched bar, stopping on the dual
 // residual: at most a fifth of dual Jacobi-PCG's iterations (the target) and fewer than
 // the previous default (scalar Chebyshev, 1 sweep). Measured at resolution 6, aspect 4:
-// dual jacobi-pcg 333, block chebyshev x2 35, chebyshev x1 64; asserted with a margin (1/6, 4/5).
+// dual jacobi-pcg 333, block chebyshev degree 3 x2 35, degree 4 x1 41, chebyshev
+// degree 3 x1 64; asserted with a margin (1/6, 4/5).
 TEST(AmgBlockGs, PrimalDefaultsBeatJacobiPcgAndTheScalarSmootherOnTheStretchedBar) {
   const PrimalCase c = primal_case("bar_hang", {{"resolution", "6"}, {"aspect", "4"}, {"prestretch", "1.05"}}, 1, 0);
   Params p;
@@ -176,6 +179,7 @@ TEST(AmgBlockGs, PrimalDefaultsBeatJacobiPcgAndTheScalarSmootherOnTheStretchedBa
   const LinearStats mg = solve_k(c, p, "mgpbd", x, c.dual_measure());
   p.amg.smoother = "chebyshev";
   p.amg.smoother_sweeps = 1;
+  p.amg.chebyshev_degree = 3;
   const LinearStats old = solve_k(c, p, "mgpbd", x, c.dual_measure());
   std::printf("dual jacobi-pcg %d, mgpbd primal default %d, scalar chebyshev x1 %d\n", dual.iterations, mg.iterations,
               old.iterations);
@@ -194,6 +198,8 @@ TEST(AmgBlockGs, AutoSmootherPerForm) {
   EXPECT_EQ(resolve_options(o, {1, nullptr}).smoother.sweeps, 1);
   EXPECT_EQ(resolve_options(o, {3, &B}).smoother.kind, kBlockSmoother);
   EXPECT_EQ(resolve_options(o, {3, &B}).smoother.sweeps, kBlockSmootherSweeps);
+  EXPECT_EQ(resolve_options(o, {1, nullptr}).smoother.degree, 3);
+  EXPECT_EQ(resolve_options(o, {3, &B}).smoother.degree, kBlockChebyshevDegree);
   o.smoother.kind = "block_sor";
   EXPECT_THROW(check_option_names(o), Error);
 }

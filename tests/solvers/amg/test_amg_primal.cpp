@@ -164,3 +164,36 @@ TEST(AmgPrimal, MinCoarseningRedoesSlowCoarseAggregation) {
   ASSERT_EQ(st_floor.status, LinearStatus::converged);
   EXPECT_LE(st_floor.iterations, st_off.iterations * 11 / 10) << st_floor.iterations << " vs " << st_off.iterations;
 }
+
+// amg.near_kernel_extra and amg.chebyshev_degree reach the hierarchy: with 2 relaxed vectors
+// appended to the rigid modes, each aggregate keeps up to 8 columns (more than 6 somewhere);
+// the extended hierarchy still solves to 1e-8; degree 5 once needs no more iterations than
+// degree 3 once.
+TEST(AmgPrimal, ExtraCandidatesAndChebyshevDegreeKeys) {
+  const PrimalCase c = primal_case("bar_hang", {{"resolution", "4"}, {"prestretch", "1.05"}}, 0, 0);
+  Params p = solver_params(1e-8);
+  set_param(p, "amg.near_kernel_extra", "2", "test");
+  set_param(p, "amg.chebyshev_degree", "5", "test");
+  const amg::AmgOptions o = amg::AmgOptions::from_settings(p);
+  EXPECT_EQ(o.near_kernel.extra, 2);
+  EXPECT_EQ(o.smoother.degree, 5);
+  EXPECT_THROW(set_param(p, "amg.chebyshev_degree", "-1", "test"), Error);
+  amg::Hierarchy h;
+  h.setup(c.K, o, {3, &c.rigid});
+  ASSERT_GE(h.num_levels(), 2);
+  const amg::NodeLayout& coarse = h.level(1).nodes;
+  int widest = 0;
+  for (int I = 0; I < coarse.num_nodes(); ++I) widest = std::max(widest, coarse.node_start[I + 1] - coarse.node_start[I]);
+  EXPECT_GT(widest, 6);
+  EXPECT_LE(widest, 8);
+  Vector x;
+  const LinearStats st = solve_k(c, p, "mgpbd", x, c.dual_measure());
+  EXPECT_EQ(st.status, LinearStatus::converged);
+  Params once = solver_params(1e-8);
+  once.amg.smoother_sweeps = 1;
+  once.amg.chebyshev_degree = 3;
+  const LinearStats deg3 = solve_k(c, once, "mgpbd", x, c.dual_measure());
+  once.amg.chebyshev_degree = 5;
+  const LinearStats deg5 = solve_k(c, once, "mgpbd", x, c.dual_measure());
+  EXPECT_LE(deg5.iterations, deg3.iterations) << deg5.iterations << " vs " << deg3.iterations;
+}
