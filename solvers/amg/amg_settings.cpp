@@ -15,7 +15,7 @@ const SettingTable<AmgSettings>& amg_settings() {
       setting("amg.nodal_strength_threshold", "theta of nodal coarsening on level 0 (block systems: primal form), on block Frobenius norms", &S::nodal_strength_threshold, 0, 1),
       setting("amg.coarse_nodal_strength_threshold", "theta of nodal coarsening on levels >= 1 (< 0: amg.nodal_strength_threshold)", &S::coarse_nodal_strength_threshold, -1, 1),
       setting("amg.min_coarsening", "block systems, levels >= 1: a nodal aggregation with fewer nodes per aggregate than this is redone with every coupling (theta 0), so smoothed-P Galerkin operators do not fill in (0 = never)", &S::min_coarsening, 0, 1e6),
-      setting("amg.prolongator_diagonal", "D of the smoothed prolongator: scalar (A's diagonal) | block (node blocks)", &S::prolongator_diagonal, {"scalar", "block"}),
+      setting("amg.prolongator_diagonal", "D of the smoothed prolongator: block (the node blocks: the block smoothers' D, whose lambda_max is then reused; on a scalar system the diagonal) | scalar (A's diagonal)", &S::prolongator_diagonal, {"scalar", "block"}),
       setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &S::smoother, {"auto", "jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"}),
       setting("amg.smoother_sweeps", "pre- and post-smoothing sweeps (0 = auto: 1)", &S::smoother_sweeps, 0, 100),
       setting("amg.chebyshev_degree", "degree of the chebyshev and block_chebyshev polynomials: passes over the level's matrix per sweep (0 = auto: 3 dual, the authors'; 4 primal)", &S::chebyshev_degree, 0, 20),

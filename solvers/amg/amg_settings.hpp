@@ -21,7 +21,7 @@ struct AmgSettings {
   double nodal_strength_threshold = 0.0;         // block systems (primal K), level 0
   double coarse_nodal_strength_threshold = 0.1;  // levels >= 1 (< 0: the level-0 value)
   double min_coarsening = 4;  // levels >= 1: fewer nodes per aggregate than this → redone at theta 0
-  std::string prolongator_diagonal = "scalar";   // D of the smoothed P: scalar | block
+  std::string prolongator_diagonal = "block";    // D of the smoothed P: block | scalar
   std::string smoother = "auto";  // auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
   int smoother_sweeps = 0;        // 0: auto (1)
   int chebyshev_degree = 0;       // 0: auto (3 dual, the authors'; 4 primal)

@@ -51,7 +51,10 @@ struct AmgOptions {
   std::string aggregation = "standard";
   NearKernelOptions near_kernel;      // kind "auto": rigid on a block system with a basis, else ones
   std::string prolongator = "auto";   // auto (smoothed on block systems, else tentative) | tentative | smoothed
-  JacobiDiagonal prolongator_diagonal = JacobiDiagonal::Scalar;  // D of the smoothed P
+  // D of the smoothed P. Block (a scalar layout's blocks are its diagonal): the same or fewer
+  // iterations than the scalar D on the captured primal systems (squash 29 against 31), and the
+  // block smoother's λ_max(D⁻¹A) serves P too (one Lanczos per level, not two).
+  JacobiDiagonal prolongator_diagonal = JacobiDiagonal::Block;
   // kind "auto": kBlockSmoother on a block system, else chebyshev; sweeps 0: kBlockSmootherSweeps
   // on a block system, else 1; degree 0: kBlockChebyshevDegree on a block system, else 3.
   SmootherOptions smoother;
