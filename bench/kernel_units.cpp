@@ -240,53 +240,70 @@ void kernel_units(const CapturedSystem& cs, const Params& p0, double budget, con
 
 void smoother_table(const CapturedSystem& cs, const Params& p, const std::string& label, bool cpu) {
   cpu_clock = cpu;
-  std::printf("| system | form | smoother | sweeps | setup s | solve s | iterations | rel. residual | solve s per decade | total s per decade |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| system | form | smoother | sweeps | degree | setup s | solve s | iterations | rel. residual | solve s per decade | total s per decade |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  struct Variant {
+    std::string kind;
+    int sweeps, degree;  // degree: Chebyshev kinds only (0 elsewhere)
+  };
   for (const std::string form : {"dual", "primal"}) {
     if (form == "primal" && !cs.has_primal()) continue;
     std::vector<std::string> kinds = {"jacobi", "chebyshev", "gs"};
     if (form == "primal") kinds.insert(kinds.end(), {"block_jacobi", "block_chebyshev", "block_gs"});
-    // The dual default is one sweep, the primal two.
-    const std::vector<int> sweep_counts = form == "dual" ? std::vector<int>{1} : std::vector<int>{1, 2};
-    for (const auto& kind : kinds)
-      for (int sweeps : sweep_counts) {
-        Params q = p;
-        q.amg.smoother = kind;
-        q.amg.smoother_sweeps = sweeps;
-        double setup = 0, solve = 0, rel = NAN;
-        int its = 0;
-        try {
-          if (form == "dual") {
-            auto s = make_linear_solver("mgpbd", q);
-            double t0 = now_s();
-            s->setup(cs.A, SetupKind::Structure, SetupContext{});
-            setup = now_s() - t0;
-            Vector x;
-            t0 = now_s();
-            const LinearStats st = s->solve(cs.b, x);
-            solve = now_s() - t0, its = st.iterations;
-            Vector r;
-            residual(cs.A, x, cs.b, r);
-            rel = norm2(r) / norm2(cs.b);
-          } else {
-            PrimalSolve ps(make_linear_solver("mgpbd", q), cs.graph, q.linear.tol);
-            double t0 = now_s();
-            ps.setup(cs.grad, cs.alpha_tilde, cs.x, SetupKind::Structure, SetupContext{});
-            setup = now_s() - t0;
-            Vector dl;
-            t0 = now_s();
-            const LinearStats st = ps.solve(cs.b, dl);
-            solve = now_s() - t0, its = st.iterations, rel = st.final_relative_residual;
-          }
-        } catch (const std::exception& e) {
-          std::printf("| %s | %s | %s | %d | failed: %s |\n", label.c_str(), form.c_str(), kind.c_str(), sweeps, e.what());
-          continue;
-        }
-        const double decades = -std::log10(rel);
-        std::printf("| %s | %s | %s | %d | %.3f | %.3f | %d | %.1e | %.3f | %.3f |\n", label.c_str(), form.c_str(),
-                    kind.c_str(), sweeps, setup, solve, its, rel, solve / decades, (setup + solve) / decades);
-        std::fflush(stdout);
+    // Dual: one sweep (its default), Chebyshev of degree 2–4. Primal: one and two sweeps, the
+    // Chebyshev kinds at degree 3 and, once, 4 and 5 (the default is degree 4 once).
+    std::vector<Variant> variants;
+    for (const auto& kind : kinds) {
+      const bool cheb = kind.find("chebyshev") != std::string::npos;
+      if (form == "dual") {
+        for (int d : cheb ? std::vector<int>{2, 3, 4} : std::vector<int>{0}) variants.push_back({kind, 1, d});
+      } else {
+        variants.push_back({kind, 1, cheb ? 3 : 0});
+        variants.push_back({kind, 2, cheb ? 3 : 0});
+        if (cheb) variants.insert(variants.end(), {{kind, 1, 4}, {kind, 1, 5}});
       }
+    }
+    for (const auto& [kind, sweeps, degree] : variants) {
+      Params q = p;
+      q.amg.smoother = kind;
+      q.amg.smoother_sweeps = sweeps;
+      q.amg.chebyshev_degree = degree;  // 0 (not a Chebyshev kind): auto, unused
+      const std::string deg = degree ? std::to_string(degree) : "-";
+      double setup = 0, solve = 0, rel = NAN;
+      int its = 0;
+      try {
+        if (form == "dual") {
+          auto s = make_linear_solver("mgpbd", q);
+          double t0 = now_s();
+          s->setup(cs.A, SetupKind::Structure, SetupContext{});
+          setup = now_s() - t0;
+          Vector x;
+          t0 = now_s();
+          const LinearStats st = s->solve(cs.b, x);
+          solve = now_s() - t0, its = st.iterations;
+          Vector r;
+          residual(cs.A, x, cs.b, r);
+          rel = norm2(r) / norm2(cs.b);
+        } else {
+          PrimalSolve ps(make_linear_solver("mgpbd", q), cs.graph, q.linear.tol);
+          double t0 = now_s();
+          ps.setup(cs.grad, cs.alpha_tilde, cs.x, SetupKind::Structure, SetupContext{});
+          setup = now_s() - t0;
+          Vector dl;
+          t0 = now_s();
+          const LinearStats st = ps.solve(cs.b, dl);
+          solve = now_s() - t0, its = st.iterations, rel = st.final_relative_residual;
+        }
+      } catch (const std::exception& e) {
+        std::printf("| %s | %s | %s | %d | %s | failed: %s |\n", label.c_str(), form.c_str(), kind.c_str(), sweeps,
+                    deg.c_str(), e.what());
+        continue;
+      }
+      const double decades = -std::log10(rel);
+      std::printf("| %s | %s | %s | %d | %s | %.3f | %.3f | %d | %.1e | %.3f | %.3f |\n", label.c_str(), form.c_str(),
+                  kind.c_str(), sweeps, deg.c_str(), setup, solve, its, rel, solve / decades, (setup + solve) / decades);
+      std::fflush(stdout);
+    }
   }
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The smoother cost-per-digit table: for each captured system, mgpbd with each smoother
-(dual: jacobi, chebyshev, gs; primal: the same and block_jacobi, block_chebyshev, block_gs, 1 and
-2 sweeps) solved from zero to linear.tol; setup, solve, iterations and the time per decade of the
+(dual: jacobi, chebyshev of degree 2-4, gs, one sweep; primal: the same and block_jacobi,
+block_chebyshev, block_gs, 1 and 2 sweeps, the Chebyshev kinds also of degree 4 and 5 once) solved from zero to linear.tol; setup, solve, iterations and the time per decade of the
 relative residual, one Markdown table (xb_bench --xb_mode=smoothers on each system in turn).
 
   smoother_table.py SYSTEM.h5... [--build DIR] [--tol 1e-8] [--threads 2]
