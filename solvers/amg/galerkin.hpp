@@ -7,6 +7,7 @@
 #pragma once
 
 #include "../../core/sparse.hpp"
+#include "block_sparse.hpp"
 
 #include <vector>
 
@@ -25,14 +26,20 @@ void spgemm_values(const SparseMatrix& A, const SparseMatrix& B, SparseMatrix& C
 
 // The general Galerkin product with its pattern cached: build() runs R·(A·P) and keeps A·P;
 // refresh() (A's values changed, same pattern; R, P unchanged) recomputes both products' values
-// only — the lazy setup of a hierarchy whose P has several entries per row.
+// only — the lazy setup of a hierarchy whose P has several entries per row. Given block layouts
+// (fine: A's nodes, coarse: P's column nodes) both products run by node blocks
+// (block_sparse.hpp) when the matrices allow it: the same A_c, less index work.
 class GalerkinProduct {
  public:
-  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
+  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
+             const NodeLayout& fine = {}, const NodeLayout& coarse = {});
   void refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
+  bool by_blocks() const { return by_blocks_; }
 
  private:
   SparseMatrix AP_;
+  bool by_blocks_ = false;
+  BlockPattern r_, a_, p_, ap_, ac_;  // the block patterns of R, A, P, A·P and A_c
 };
 
 class AggregateGalerkin {

@@ -1,8 +1,9 @@
 #include "smoothed_prolongator.hpp"
 
 #include "../../core/error.hpp"
-#include "relaxation/block_diagonal.hpp"
+#include "block_sparse.hpp"
 #include "galerkin.hpp"
+#include "relaxation/block_diagonal.hpp"
 #include "relaxation/smoothers.hpp"
 
 #include <algorithm>
@@ -81,6 +82,29 @@ SparseMatrix block_scale_rows(const BlockDiagonal& D, const SparseMatrix& X) {
   return Y;
 }
 
+// X ← D⁻¹X in place, when the rows of each node share their columns (X seen as node blocks): per
+// node and column a b × b product, summed in block_scale_rows' order.
+void block_scale_node_rows(const BlockDiagonal& D, SparseMatrix& X) {
+  const int nn = D.num_nodes();
+  const int* xo = X.outerIndexPtr();
+#pragma omp parallel
+  {
+    std::vector<double> y;
+#pragma omp for schedule(dynamic, 256)
+    for (int I = 0; I < nn; ++I) {
+      const int s = D.node_begin(I), b = D.node_end(I) - s;
+      if (b == 0) continue;
+      const int len = xo[s + 1] - xo[s];
+      double* x = X.valuePtr() + xo[s];
+      y.assign(static_cast<size_t>(b) * len, 0.0);
+      for (int r = 0; r < b; ++r)
+        for (int t = 0; t < b; ++t)
+          for (int q = 0; q < len; ++q) y[static_cast<size_t>(r) * len + q] += D.inverse(I, r, t) * x[static_cast<size_t>(t) * len + q];
+      std::copy(y.begin(), y.end(), x);
+    }
+  }
+}
+
 // C = X + a·Y, patterns merged row by row (sorted columns in, sorted columns out).
 SparseMatrix add_scaled(const SparseMatrix& X, double a, const SparseMatrix& Y) {
   const int n = static_cast<int>(X.rows());
@@ -118,20 +142,25 @@ SparseMatrix add_scaled(const SparseMatrix& X, double a, const SparseMatrix& Y) 
 
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
-                                       double known_lambda) {
+                                       double known_lambda, const NodeLayout& coarse_nodes) {
   if (A.rows() != T.rows()) throw Error("smoothed prolongator: A and T do not fit");
   SmoothedProlongator out;
   Vector v;
-  SparseMatrix DinvAT;
+  // Block levels: A·T and Pᵀ by node blocks (block_sparse.hpp), the same matrices as the scalar path.
+  BlockPattern pa, pt, pat;
+  const bool by_blocks = pa.build(A, nodes, nodes) && pt.build(T, nodes, coarse_nodes);
+  SparseMatrix DinvAT = by_blocks ? block_product(A, pa, T, pt, pat) : spgemm(A, T);
   if (diag == JacobiDiagonal::Block && !nodes.scalar()) {
     BlockDiagonal D;
     D.build(A, nodes);
     out.lambda = known_lambda > 0 ? known_lambda : estimate_lambda_max(A, D, v, lanczos_steps, seed);
-    DinvAT = block_scale_rows(D, spgemm(A, T));
+    if (by_blocks)
+      block_scale_node_rows(D, DinvAT);
+    else
+      DinvAT = block_scale_rows(D, DinvAT);
   } else {
     const Vector inv_diag = inverse_diagonal(A);
     out.lambda = known_lambda > 0 ? known_lambda : estimate_lambda_max(A, inv_diag, v, lanczos_steps, seed);
-    DinvAT = spgemm(A, T);
     const int n = static_cast<int>(DinvAT.rows());
 #pragma omp parallel for schedule(static)
     for (int i = 0; i < n; ++i)
@@ -141,7 +170,8 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
     throw Error("smoothed prolongator: no positive estimate of lambda_max(D^-1 A) (matrix not positive definite?)");
   out.omega = 4.0 / (3.0 * out.lambda);
   out.P = add_scaled(T, -out.omega, DinvAT);
-  out.R = transpose(out.P);
+  BlockPattern pp;
+  out.R = by_blocks && pp.build(out.P, nodes, coarse_nodes) ? block_transpose(out.P, pp, pat) : transpose(out.P);
   return out;
 }
 
