@@ -134,20 +134,39 @@ void block_product_pattern(const BlockPattern& pa, const BlockPattern& pb, Spars
 }
 
 namespace {
-// c += a·b for a bi × bk block (stride lda), b bk × bj (ldb), c bi × bj (ldc). BJ > 0: bj known
-// at compile time (the usual 3 and 6), so the inner loop unrolls and vectorises.
-template <int BJ>
-inline void block_madd(int bi, int bk, int bj, const double* a, int lda, const double* b, int ldb, double* c, int ldc) {
-  const int n = BJ > 0 ? BJ : bj;
+// c += a·b for a bi × bk block (stride lda), b bk × bj (ldb), c bi × bj (ldc). BK, BJ > 0: bk, bj
+// known at compile time (the usual 3 and 6), so the loops unroll and vectorise.
+template <int BK, int BJ>
+inline void block_madd(int bi, int bk, int bj, const double* __restrict a, int lda, const double* __restrict b, int ldb,
+                       double* __restrict c, int ldc) {
+  const int nk = BK > 0 ? BK : bk;
   for (int r = 0; r < bi; ++r) {
     double* cr = c + static_cast<long>(r) * ldc;
     const double* ar = a + static_cast<long>(r) * lda;
-    for (int t = 0; t < bk; ++t) {
-      const double s = ar[t];
-      const double* bt = b + static_cast<long>(t) * ldb;
-      for (int q = 0; q < n; ++q) cr[q] += s * bt[q];
+    if constexpr (BJ > 0) {
+      double acc[BJ];  // c's row in registers over the bk terms (the same sums, the same order)
+      for (int q = 0; q < BJ; ++q) acc[q] = cr[q];
+      for (int t = 0; t < nk; ++t)
+        for (int q = 0; q < BJ; ++q) acc[q] += ar[t] * b[static_cast<long>(t) * ldb + q];
+      for (int q = 0; q < BJ; ++q) cr[q] = acc[q];
+    } else {
+      for (int t = 0; t < nk; ++t)
+        for (int q = 0; q < bj; ++q) cr[q] += ar[t] * b[static_cast<long>(t) * ldb + q];
     }
   }
+}
+
+inline void block_madd_any(int bi, int bk, int bj, const double* a, int lda, const double* b, int ldb, double* c, int ldc) {
+  if (bj == 6 && bk == 3)
+    block_madd<3, 6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else if (bj == 6 && bk == 6)
+    block_madd<6, 6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else if (bj == 6)
+    block_madd<0, 6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else if (bj == 3 && bk == 3)
+    block_madd<3, 3>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else
+    block_madd<0, 0>(bi, bk, bj, a, lda, b, ldb, c, ldc);
 }
 
 // Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes).
@@ -167,13 +186,7 @@ void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const Spar
     for (int t = pb.ptr[K]; t < pb.ptr[K + 1]; ++t) {
       const int J = pb.col[t], bj = pb.cols(J);
       const double* b = b0 + pb.offset[t];
-      double* c = c0 + pos[J];
-      if (bj == 3)
-        block_madd<3>(bi, bk, bj, a, lda, b, ldb, c, ldc);
-      else if (bj == 6)
-        block_madd<6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
-      else
-        block_madd<0>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+      block_madd_any(bi, bk, bj, a, lda, b, ldb, c0 + pos[J], ldc);
     }
   }
 }
