@@ -214,41 +214,4 @@ SparseMatrix block_product(const SparseMatrix& A, const BlockPattern& pa, const 
   return C;
 }
 
-SparseMatrix block_transpose(const SparseMatrix& A, const BlockPattern& pa, BlockPattern& pt) {
-  const int nr = pa.row_nodes(), ncn = static_cast<int>(pa.col_start.size()) - 1;
-  pt.row_start = pa.col_start;
-  pt.col_start = pa.row_start;
-  pt.ptr.assign(ncn + 1, 0);
-  for (int k = 0; k < pa.ptr[nr]; ++k) ++pt.ptr[pa.col[k] + 1];
-  for (int J = 0; J < ncn; ++J) pt.ptr[J + 1] += pt.ptr[J];
-  // Row nodes in increasing order: each block row of Aᵀ comes out sorted. src: A's block.
-  pt.col.resize(pa.ptr[nr]);
-  pt.offset.resize(pa.ptr[nr]);
-  std::vector<int> src(pa.ptr[nr]), fill(pt.ptr.begin(), pt.ptr.end() - 1), len(ncn, 0);
-  for (int I = 0; I < nr; ++I)
-    for (int k = pa.ptr[I]; k < pa.ptr[I + 1]; ++k) {
-      const int J = pa.col[k], at = fill[J]++;
-      pt.col[at] = I;
-      pt.offset[at] = len[J];
-      src[at] = k;
-      len[J] += pa.rows(I);
-    }
-  SparseMatrix T(A.cols(), A.rows());
-  fill_row_pointers(pt, len, T);
-  const int *ao = A.outerIndexPtr(), *to = T.outerIndexPtr();
-#pragma omp parallel for schedule(dynamic, 64)
-  for (int J = 0; J < ncn; ++J)
-    for (int q = pt.ptr[J]; q < pt.ptr[J + 1]; ++q) {
-      const int I = pt.col[q], si = pa.row_start[I], bi = pa.rows(I);
-      const double* a = A.valuePtr() + ao[si] + pa.offset[src[q]];
-      const int lda = ao[si + 1] - ao[si];
-      for (int r = pt.row_start[J]; r < pt.row_start[J + 1]; ++r)
-        for (int p = 0; p < bi; ++p) {
-          T.innerIndexPtr()[to[r] + pt.offset[q] + p] = si + p;
-          T.valuePtr()[to[r] + pt.offset[q] + p] = a[static_cast<long>(p) * lda + (r - pt.row_start[J])];
-        }
-    }
-  return T;
-}
-
 }  // namespace xb::amg

@@ -40,7 +40,4 @@ void block_product_values(const SparseMatrix& A, const BlockPattern& pa, const S
 SparseMatrix block_product(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
                            BlockPattern& pc);
 
-// Aᵀ and its block pattern (the values are a permutation of A's).
-SparseMatrix block_transpose(const SparseMatrix& A, const BlockPattern& pa, BlockPattern& pt);
-
 }  // namespace xb::amg

@@ -146,7 +146,7 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
   if (A.rows() != T.rows()) throw Error("smoothed prolongator: A and T do not fit");
   SmoothedProlongator out;
   Vector v;
-  // Block levels: A·T and Pᵀ by node blocks (block_sparse.hpp), the same matrices as the scalar path.
+  // Block levels: A·T by node blocks (block_sparse.hpp), the same matrices as the scalar path.
   BlockPattern pa, pt, pat;
   const bool by_blocks = pa.build(A, nodes, nodes) && pt.build(T, nodes, coarse_nodes);
   SparseMatrix DinvAT = by_blocks ? block_product(A, pa, T, pt, pat) : spgemm(A, T);
@@ -170,8 +170,7 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
     throw Error("smoothed prolongator: no positive estimate of lambda_max(D^-1 A) (matrix not positive definite?)");
   out.omega = 4.0 / (3.0 * out.lambda);
   out.P = add_scaled(T, -out.omega, DinvAT);
-  BlockPattern pp;
-  out.R = by_blocks && pp.build(out.P, nodes, coarse_nodes) ? block_transpose(out.P, pp, pat) : transpose(out.P);
+  out.R = transpose(out.P);  // as fast as a block transpose (measured): a counting sort
   return out;
 }
 

@@ -1,5 +1,5 @@
 // The node-block products of block levels (block_sparse.hpp) against the scalar CSR products on
-// real primal-form systems: K·T, the smoothed P and R = Pᵀ, the Galerkin product and its refresh,
+// real primal-form systems: K·T, the smoothed P, the Galerkin product and its refresh,
 // on level 0 (3×3 blocks) and on a coarse level whose nodes have 3, 5 or 6 unknowns.
 #include "solvers/amg/block_sparse.hpp"
 #include "solvers/amg/galerkin.hpp"
@@ -72,18 +72,17 @@ TEST(AmgBlockSparse, PatternOfKAndWhatIsNotBlocks) {
   EXPECT_FALSE(p.build(holed, nodes, nodes));  // row 0 of node 0 lacks a column its other rows hold
 }
 
-TEST(AmgBlockSparse, ProductsAndTransposeEqualTheScalarOnesWithUnequalCoarseNodes) {
+TEST(AmgBlockSparse, ProductsEqualTheScalarOnesWithUnequalCoarseNodes) {
   const SparseMatrix& K = bar().K;
   const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K.rows()), 3);
   const Tentative T = tentative_with_small_aggregate(K, nodes, bar().rigid);
   const NodeLayout coarse{T.col_start};
   ASSERT_GT(small_nodes(T.col_start), 0);
-  BlockPattern pk, pt, pkt, ptt;
+  BlockPattern pk, pt, pkt;
   ASSERT_TRUE(pk.build(K, nodes, nodes));
   ASSERT_TRUE(pt.build(T.P, nodes, coarse));
   const SparseMatrix KT = block_product(K, pk, T.P, pt, pkt);
   expect_same(KT, spgemm(K, T.P), "K T");
-  expect_same(block_transpose(T.P, pt, ptt), transpose(T.P), "T^T");
   // The Galerkin product of T, then of the smoothed P, for both Jacobi diagonals.
   GalerkinProduct g;
   SparseMatrix Ac;
