@@ -59,7 +59,7 @@ bool BlockPattern::build(const SparseMatrix& A, const NodeLayout& row_nodes, con
   for (int I = 0; I < nr; ++I) {
     const int s = row_start[I];
     int nb = 0;
-    if (rows(I) > 0) split_row(ac + ao[s], ao[s + 1] - ao[s], node_of_col, col_start, &col[ptr[I]], &offset[ptr[I]], nb);
+    if (rows(I) > 0) split_row(ac + ao[s], ao[s + 1] - ao[s], node_of_col, col_start, col.data() + ptr[I], offset.data() + ptr[I], nb);
   }
   return true;
 }
@@ -101,7 +101,7 @@ void block_product_pattern(const BlockPattern& pa, const BlockPattern& pb, Spars
 #pragma omp parallel
   {
     std::vector<int> mark(ncn, -1), js;
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(dynamic, 8)
     for (int I = 0; I < nr; ++I) {
       product_row(pa, pb, I, mark, js);
       pc.ptr[I + 1] = static_cast<int>(js.size());
@@ -118,7 +118,7 @@ void block_product_pattern(const BlockPattern& pa, const BlockPattern& pb, Spars
 #pragma omp parallel
   {
     std::vector<int> mark(ncn, -1), js;
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(dynamic, 8)
     for (int I = 0; I < nr; ++I) {
       product_row(pa, pb, I, mark, js);
       int off = 0;
@@ -200,7 +200,7 @@ void block_product_values(const SparseMatrix& A, const BlockPattern& pa, const S
 #pragma omp parallel
   {
     std::vector<int> pos(ncn, 0);
-#pragma omp for schedule(dynamic, 64)
+#pragma omp for schedule(dynamic, 8)
     for (int I = 0; I < nr; ++I)
       if (pa.rows(I) > 0) product_block_row(A, pa, B, pb, C, pc, I, pos);
   }
