@@ -1,5 +1,6 @@
 // Galerkin coarse operators A_c = Pᵀ A P (Eq. 27, R = Pᵀ).
-//  General path: two parallel row-wise (Gustavson) sparse products, R·(A·P); any P.
+//  General path: two parallel row-wise (Gustavson) sparse products, R·(A·P); any P. On block
+//    levels (the primal form) the same products by node blocks (block_sparse.hpp).
 //  One-candidate path: when P has at most one entry per row (p_i in column agg(i)),
 //    A_c[agg(i), agg(j)] = Σ p_i A_ij p_j, a weighted sum over aggregates. build() finds A_c's
 //    pattern and, per coarse non-zero, the list of fine non-zeros that add into it with their
