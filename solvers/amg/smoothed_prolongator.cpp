@@ -138,6 +138,35 @@ SparseMatrix add_scaled(const SparseMatrix& X, double a, const SparseMatrix& Y) 
   for (int i = 0; i < n; ++i) merge(i, C.innerIndexPtr() + rowptr[i], C.valuePtr() + rowptr[i]);
   return C;
 }
+
+// Y ← X + a·Y in Y's storage, when every row of Y holds X's columns (A·T holds T's pattern when A
+// stores its diagonal): no merge, no new matrix, the same values as add_scaled. False, and Y
+// untouched, otherwise.
+bool add_scaled_in_place(const SparseMatrix& X, double a, SparseMatrix& Y) {
+  const int n = static_cast<int>(X.rows());
+  const int *xo = X.outerIndexPtr(), *xc = X.innerIndexPtr(), *yo = Y.outerIndexPtr(), *yc = Y.innerIndexPtr();
+  int missing = 0;
+#pragma omp parallel for schedule(static) reduction(+ : missing)
+  for (int i = 0; i < n; ++i)
+    for (int p = xo[i], q = yo[i]; p < xo[i + 1]; ++p, ++q) {
+      while (q < yo[i + 1] && yc[q] < xc[p]) ++q;
+      if (q == yo[i + 1] || yc[q] != xc[p]) {
+        ++missing;
+        break;
+      }
+    }
+  if (missing) return false;
+  double* yv = Y.valuePtr();
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    for (int q = yo[i]; q < yo[i + 1]; ++q) yv[q] *= a;
+    for (int p = xo[i], q = yo[i]; p < xo[i + 1]; ++p, ++q) {
+      while (yc[q] < xc[p]) ++q;
+      yv[q] = X.valuePtr()[p] + yv[q];
+    }
+  }
+  return true;
+}
 }  // namespace
 
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
@@ -169,7 +198,10 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
   if (!(out.lambda > 0) || !std::isfinite(out.lambda))
     throw Error("smoothed prolongator: no positive estimate of lambda_max(D^-1 A) (matrix not positive definite?)");
   out.omega = 4.0 / (3.0 * out.lambda);
-  out.P = add_scaled(T, -out.omega, DinvAT);
+  if (by_blocks && add_scaled_in_place(T, -out.omega, DinvAT))
+    out.P = std::move(DinvAT);
+  else
+    out.P = add_scaled(T, -out.omega, DinvAT);
   out.R = transpose(out.P);  // as fast as a block transpose (measured): a counting sort
   return out;
 }
