@@ -59,7 +59,8 @@ bool BlockPattern::build(const SparseMatrix& A, const NodeLayout& row_nodes, con
   for (int I = 0; I < nr; ++I) {
     const int s = row_start[I];
     int nb = 0;
-    if (rows(I) > 0) split_row(ac + ao[s], ao[s + 1] - ao[s], node_of_col, col_start, col.data() + ptr[I], offset.data() + ptr[I], nb);
+    if (rows(I) > 0)
+      split_row(ac + ao[s], ao[s + 1] - ao[s], node_of_col, col_start, col.data() + ptr[I], offset.data() + ptr[I], nb);
   }
   return true;
 }

@@ -98,8 +98,10 @@ void block_scale_node_rows(const BlockDiagonal& D, SparseMatrix& X) {
       double* x = X.valuePtr() + xo[s];
       y.assign(static_cast<size_t>(b) * len, 0.0);
       for (int r = 0; r < b; ++r)
-        for (int t = 0; t < b; ++t)
-          for (int q = 0; q < len; ++q) y[static_cast<size_t>(r) * len + q] += D.inverse(I, r, t) * x[static_cast<size_t>(t) * len + q];
+        for (int t = 0; t < b; ++t) {
+          const double d = D.inverse(I, r, t);
+          for (int q = 0; q < len; ++q) y[static_cast<size_t>(r) * len + q] += d * x[static_cast<size_t>(t) * len + q];
+        }
       std::copy(y.begin(), y.end(), x);
     }
   }
