@@ -93,15 +93,27 @@ void spgemm_values(const SparseMatrix& A, const SparseMatrix& B, SparseMatrix& C
   }
 }
 
-void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac) {
-  AP_ = spgemm(A, P);
-  Ac = spgemm(R, AP_);
+void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
+                            const NodeLayout& fine, const NodeLayout& coarse) {
+  by_blocks_ = a_.build(A, fine, fine) && p_.build(P, fine, coarse) && r_.build(R, coarse, fine);
+  if (!by_blocks_) {
+    AP_ = spgemm(A, P);
+    Ac = spgemm(R, AP_);
+    return;
+  }
+  AP_ = block_product(A, a_, P, p_, ap_);
+  Ac = block_product(R, r_, AP_, ap_, ac_);
 }
 
 void GalerkinProduct::refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac) {
   if (AP_.rows() != A.rows() || AP_.cols() != P.cols()) throw Error("Galerkin refresh before build");
-  spgemm_values(A, P, AP_);
-  spgemm_values(R, AP_, Ac);
+  if (!by_blocks_) {
+    spgemm_values(A, P, AP_);
+    spgemm_values(R, AP_, Ac);
+    return;
+  }
+  block_product_values(A, a_, P, p_, AP_, ap_);
+  block_product_values(R, r_, AP_, ap_, Ac, ac_);
 }
 
 namespace {

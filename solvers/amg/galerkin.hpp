@@ -1,5 +1,6 @@
 // Galerkin coarse operators A_c = Pᵀ A P (Eq. 27, R = Pᵀ).
-//  General path: two parallel row-wise (Gustavson) sparse products, R·(A·P); any P.
+//  General path: two parallel row-wise (Gustavson) sparse products, R·(A·P); any P. On block
+//    levels (the primal form) the same products by node blocks (block_sparse.hpp).
 //  One-candidate path: when P has at most one entry per row (p_i in column agg(i)),
 //    A_c[agg(i), agg(j)] = Σ p_i A_ij p_j, a weighted sum over aggregates. build() finds A_c's
 //    pattern and, per coarse non-zero, the list of fine non-zeros that add into it with their
@@ -7,6 +8,7 @@
 #pragma once
 
 #include "../../core/sparse.hpp"
+#include "block_sparse.hpp"
 
 #include <vector>
 
@@ -25,14 +27,20 @@ void spgemm_values(const SparseMatrix& A, const SparseMatrix& B, SparseMatrix& C
 
 // The general Galerkin product with its pattern cached: build() runs R·(A·P) and keeps A·P;
 // refresh() (A's values changed, same pattern; R, P unchanged) recomputes both products' values
-// only — the lazy setup of a hierarchy whose P has several entries per row.
+// only — the lazy setup of a hierarchy whose P has several entries per row. Given block layouts
+// (fine: A's nodes, coarse: P's column nodes) both products run by node blocks
+// (block_sparse.hpp) when the matrices allow it: the same A_c, less index work.
 class GalerkinProduct {
  public:
-  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
+  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
+             const NodeLayout& fine = {}, const NodeLayout& coarse = {});
   void refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
+  bool by_blocks() const { return by_blocks_; }
 
  private:
   SparseMatrix AP_;
+  bool by_blocks_ = false;
+  BlockPattern r_, a_, p_, ap_, ac_;  // the block patterns of R, A, P, A·P and A_c
 };
 
 class AggregateGalerkin {

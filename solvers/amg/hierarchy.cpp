@@ -134,7 +134,8 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     const bool block_p = opt_.prolongator_diagonal == JacobiDiagonal::Block && !L.nodes.scalar();
     const double known = L.smoother->block_diagonal() == block_p ? L.smoother->lambda_max() : 0.0;
     SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,
-                                               opt_.smoother.power_iterations, opt_.smoother.seed, known);
+                                               opt_.smoother.power_iterations, opt_.smoother.seed, known,
+                                               NodeLayout{T.col_start});
     T.P = std::move(S.P);
     T.R = std::move(S.R);
     T.max_row_entries = 0;
@@ -145,7 +146,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   if (L.one_candidate)
     L.galerkin.build(Al, T.P, T.R, next.A_own);
   else
-    L.product.build(T.R, Al, T.P, next.A_own);
+    L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
   if (!L.nodes.scalar()) next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns
   B = T.B_coarse;
   L.aggregates = std::move(agg);

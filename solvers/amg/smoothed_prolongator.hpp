@@ -23,10 +23,12 @@ struct SmoothedProlongator {
 // A: SPD. T: the tentative prolongator. `nodes` is needed for the block diagonal (a scalar
 // layout makes Block the same as Scalar). Lanczos steps and seed as for the smoothers;
 // known_lambda > 0 is a known λ_max(D⁻¹A) estimate for this D (the smoother's), reused.
+// coarse_nodes: T's column nodes (Tentative::col_start); with block `nodes` the products run by
+// node blocks (block_sparse.hpp), giving the same P and R.
 // Throws xb::Error if A's diagonal (blocks) is not positive definite.
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
-                                       double known_lambda = 0);
+                                       double known_lambda = 0, const NodeLayout& coarse_nodes = {});
 
 // B = Aᵀ (parallel over A's columns is not needed: a counting sort, O(nnz)).
 SparseMatrix transpose(const SparseMatrix& A);

@@ -1,0 +1,218 @@
+#include "block_sparse.hpp"
+
+#include "../../core/error.hpp"
+
+#include <algorithm>
+#include <omp.h>
+
+namespace xb::amg {
+
+namespace {
+// The blocks of row node I in its first row's columns (cs: those columns, len of them): per
+// block its column node and offset. False if the columns are not whole column nodes.
+bool split_row(const int* cs, int len, const std::vector<int>& node_of_col, const std::vector<int>& col_start,
+               int* col, int* offset, int& nb) {
+  nb = 0;
+  for (int q = 0; q < len;) {
+    const int J = node_of_col[cs[q]], b = col_start[J + 1] - col_start[J];
+    // Columns are sorted and distinct: first and last of the node present ⇒ all of it.
+    if (cs[q] != col_start[J] || q + b > len || cs[q + b - 1] != col_start[J + 1] - 1) return false;
+    if (col) {
+      col[nb] = J;
+      offset[nb] = q;
+    }
+    ++nb;
+    q += b;
+  }
+  return true;
+}
+
+bool layout_fits(const NodeLayout& l, long n) {
+  return !l.scalar() && l.node_start.front() == 0 && l.node_start.back() == n;
+}
+}  // namespace
+
+bool BlockPattern::build(const SparseMatrix& A, const NodeLayout& row_nodes, const NodeLayout& col_nodes) {
+  if (!layout_fits(row_nodes, A.rows()) || !layout_fits(col_nodes, A.cols())) return false;
+  row_start = row_nodes.node_start;
+  col_start = col_nodes.node_start;
+  const int nr = static_cast<int>(row_start.size()) - 1, ncn = static_cast<int>(col_start.size()) - 1;
+  std::vector<int> node_of_col(A.cols());
+  for (int J = 0; J < ncn; ++J) std::fill(node_of_col.begin() + col_start[J], node_of_col.begin() + col_start[J + 1], J);
+  const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr();
+  ptr.assign(nr + 1, 0);
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (int I = 0; I < nr; ++I) {
+    const int s = row_start[I], e = row_start[I + 1];
+    if (s == e) continue;
+    const int len = ao[s + 1] - ao[s];
+    for (int r = s + 1; r < e; ++r)
+      if (ao[r + 1] - ao[r] != len || !std::equal(ac + ao[s], ac + ao[s + 1], ac + ao[r])) ++bad;
+    if (!split_row(ac + ao[s], len, node_of_col, col_start, nullptr, nullptr, ptr[I + 1])) ++bad;
+  }
+  if (bad) return false;
+  for (int I = 0; I < nr; ++I) ptr[I + 1] += ptr[I];
+  col.resize(ptr[nr]);
+  offset.resize(ptr[nr]);
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nr; ++I) {
+    const int s = row_start[I];
+    int nb = 0;
+    if (rows(I) > 0)
+      split_row(ac + ao[s], ao[s + 1] - ao[s], node_of_col, col_start, col.data() + ptr[I], offset.data() + ptr[I], nb);
+  }
+  return true;
+}
+
+namespace {
+// The sorted column nodes of block row I of A·B; mark (per thread, over B's column nodes) is
+// stamped with I, so it needs no reset.
+void product_row(const BlockPattern& pa, const BlockPattern& pb, int I, std::vector<int>& mark, std::vector<int>& out) {
+  out.clear();
+  for (int k = pa.ptr[I]; k < pa.ptr[I + 1]; ++k) {
+    const int K = pa.col[k];
+    for (int t = pb.ptr[K]; t < pb.ptr[K + 1]; ++t)
+      if (mark[pb.col[t]] != I) {
+        mark[pb.col[t]] = I;
+        out.push_back(pb.col[t]);
+      }
+  }
+  std::sort(out.begin(), out.end());
+}
+
+// C's CSR row pointers from the scalar length of each row node's rows.
+void fill_row_pointers(const BlockPattern& pc, const std::vector<int>& len, SparseMatrix& C) {
+  int* co = C.outerIndexPtr();
+  co[0] = 0;
+  for (int I = 0; I < pc.row_nodes(); ++I)
+    for (int r = pc.row_start[I]; r < pc.row_start[I + 1]; ++r) co[r + 1] = co[r] + len[I];
+  C.resizeNonZeros(co[C.rows()]);
+  std::fill(C.valuePtr(), C.valuePtr() + C.nonZeros(), 0.0);
+}
+}  // namespace
+
+void block_product_pattern(const BlockPattern& pa, const BlockPattern& pb, SparseMatrix& C, BlockPattern& pc) {
+  if (pa.col_start != pb.row_start) throw Error("block product: the inner node layouts differ");
+  const int nr = pa.row_nodes(), ncn = static_cast<int>(pb.col_start.size()) - 1;
+  pc.row_start = pa.row_start;
+  pc.col_start = pb.col_start;
+  pc.ptr.assign(nr + 1, 0);
+  std::vector<int> len(nr, 0);
+#pragma omp parallel
+  {
+    std::vector<int> mark(ncn, -1), js;
+#pragma omp for schedule(dynamic, 8)
+    for (int I = 0; I < nr; ++I) {
+      product_row(pa, pb, I, mark, js);
+      pc.ptr[I + 1] = static_cast<int>(js.size());
+      for (int J : js) len[I] += pc.cols(J);
+    }
+  }
+  for (int I = 0; I < nr; ++I) pc.ptr[I + 1] += pc.ptr[I];
+  pc.col.resize(pc.ptr[nr]);
+  pc.offset.resize(pc.ptr[nr]);
+  C.resize(pa.row_start.back(), pb.col_start.back());
+  fill_row_pointers(pc, len, C);
+  const int* co = C.outerIndexPtr();
+  int* cc = C.innerIndexPtr();
+#pragma omp parallel
+  {
+    std::vector<int> mark(ncn, -1), js;
+#pragma omp for schedule(dynamic, 8)
+    for (int I = 0; I < nr; ++I) {
+      product_row(pa, pb, I, mark, js);
+      int off = 0;
+      for (size_t q = 0; q < js.size(); ++q) {
+        pc.col[pc.ptr[I] + q] = js[q];
+        pc.offset[pc.ptr[I] + q] = off;
+        for (int r = pc.row_start[I]; r < pc.row_start[I + 1]; ++r)
+          for (int c = 0; c < pc.cols(js[q]); ++c) cc[co[r] + off + c] = pc.col_start[js[q]] + c;
+        off += pc.cols(js[q]);
+      }
+    }
+  }
+}
+
+namespace {
+// c += a·b for a bi × bk block (stride lda), b bk × bj (ldb), c bi × bj (ldc). BK, BJ > 0: bk, bj
+// known at compile time (the usual 3 and 6), so the loops unroll and vectorise.
+template <int BK, int BJ>
+inline void block_madd(int bi, int bk, int bj, const double* __restrict a, int lda, const double* __restrict b, int ldb,
+                       double* __restrict c, int ldc) {
+  const int nk = BK > 0 ? BK : bk;
+  for (int r = 0; r < bi; ++r) {
+    double* cr = c + static_cast<long>(r) * ldc;
+    const double* ar = a + static_cast<long>(r) * lda;
+    if constexpr (BJ > 0) {
+      double acc[BJ];  // c's row in registers over the bk terms (the same sums, the same order)
+      for (int q = 0; q < BJ; ++q) acc[q] = cr[q];
+      for (int t = 0; t < nk; ++t)
+        for (int q = 0; q < BJ; ++q) acc[q] += ar[t] * b[static_cast<long>(t) * ldb + q];
+      for (int q = 0; q < BJ; ++q) cr[q] = acc[q];
+    } else {
+      for (int t = 0; t < nk; ++t)
+        for (int q = 0; q < bj; ++q) cr[q] += ar[t] * b[static_cast<long>(t) * ldb + q];
+    }
+  }
+}
+
+inline void block_madd_any(int bi, int bk, int bj, const double* a, int lda, const double* b, int ldb, double* c, int ldc) {
+  if (bj == 6 && bk == 3)
+    block_madd<3, 6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else if (bj == 6 && bk == 6)
+    block_madd<6, 6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else if (bj == 6)
+    block_madd<0, 6>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else if (bj == 3 && bk == 3)
+    block_madd<3, 3>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+  else
+    block_madd<0, 0>(bi, bk, bj, a, lda, b, ldb, c, ldc);
+}
+
+// Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes).
+void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
+                       SparseMatrix& C, const BlockPattern& pc, int I, std::vector<int>& pos) {
+  const int s = pa.row_start[I], bi = pa.rows(I);
+  const int *ao = A.outerIndexPtr(), *bo = B.outerIndexPtr(), *co = C.outerIndexPtr();
+  const int lda = ao[s + 1] - ao[s], ldc = co[s + 1] - co[s];
+  double* c0 = C.valuePtr() + co[s];
+  std::fill(c0, c0 + static_cast<long>(bi) * ldc, 0.0);
+  for (int q = pc.ptr[I]; q < pc.ptr[I + 1]; ++q) pos[pc.col[q]] = pc.offset[q];
+  for (int k = pa.ptr[I]; k < pa.ptr[I + 1]; ++k) {
+    const int K = pa.col[k], sk = pb.row_start[K], bk = pb.rows(K);
+    const double* a = A.valuePtr() + ao[s] + pa.offset[k];
+    const int ldb = bo[sk + 1] - bo[sk];
+    const double* b0 = B.valuePtr() + bo[sk];
+    for (int t = pb.ptr[K]; t < pb.ptr[K + 1]; ++t) {
+      const int J = pb.col[t], bj = pb.cols(J);
+      const double* b = b0 + pb.offset[t];
+      block_madd_any(bi, bk, bj, a, lda, b, ldb, c0 + pos[J], ldc);
+    }
+  }
+}
+}  // namespace
+
+void block_product_values(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
+                          SparseMatrix& C, const BlockPattern& pc) {
+  if (A.rows() != C.rows() || B.cols() != C.cols() || pa.col_start != pb.row_start || pc.ptr.size() != pa.ptr.size())
+    throw Error("block product: the operands do not fit the cached pattern");
+  const int nr = pa.row_nodes(), ncn = static_cast<int>(pc.col_start.size()) - 1;
+#pragma omp parallel
+  {
+    std::vector<int> pos(ncn, 0);
+#pragma omp for schedule(dynamic, 8)
+    for (int I = 0; I < nr; ++I)
+      if (pa.rows(I) > 0) product_block_row(A, pa, B, pb, C, pc, I, pos);
+  }
+}
+
+SparseMatrix block_product(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
+                           BlockPattern& pc) {
+  SparseMatrix C;
+  block_product_pattern(pa, pb, C, pc);
+  block_product_values(A, pa, B, pb, C, pc);
+  return C;
+}
+
+}  // namespace xb::amg
