@@ -73,11 +73,11 @@ struct AmgOptions {
 };
 
 // What amg.smoother = auto, amg.smoother_sweeps = 0 and amg.chebyshev_degree = 0 take on block
-// systems (the primal form): one sweep of a degree-4 Chebyshev in D_block⁻¹A, the least passes
-// over K per decade of residual among the variants measured on the captured systems
-// (docs/primal_form.md, "Smoother cost per digit"): four passes before and after where degree 3
-// × 2 made six for 0–30% fewer iterations. The block diagonal matters on the stretched bar:
-// scalar Chebyshev needed about twice the iterations, block Gauss–Seidel 1.5×.
+// systems (the primal form): one sweep of a degree-4 Chebyshev in D_block⁻¹A. Per decade of
+// residual it is cheaper than degree 3 × 2 on every captured system (docs/kernels.md, "Smoother
+// cost per digit": four passes before and after instead of six, for 0–30% more iterations);
+// degree 3 × 1 is cheaper still but leaves the stretched bar above a fifth of dual jacobi-pcg's
+// iterations. Block Gauss–Seidel costs about twice as much per decade there.
 inline constexpr const char* kBlockSmoother = "block_chebyshev";
 inline constexpr int kBlockSmootherSweeps = 1;
 inline constexpr int kBlockChebyshevDegree = 4;
