@@ -66,9 +66,9 @@ struct AmgOptions {
   // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
   std::string precision = "double";
   // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
-  // amg.coarse_nodal_strength_threshold, amg.aggregation, amg.near_kernel*, amg.prolongator,
-  // amg.prolongator_diagonal, amg.smoother*, amg.chebyshev_degree, amg.max_coarse, amg.max_levels, amg.coarse_solver,
-  // amg.jacobi_omega, amg.precision, seed).
+  // amg.coarse_nodal_strength_threshold, amg.min_coarsening, amg.aggregation, amg.near_kernel*,
+  // amg.prolongator, amg.prolongator_diagonal, amg.smoother*, amg.chebyshev_degree,
+  // amg.max_coarse, amg.max_levels, amg.coarse_solver, amg.jacobi_omega, amg.precision, seed).
   static AmgOptions from_settings(const SolverSettings& p);
 };
 
