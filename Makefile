@@ -6,8 +6,12 @@ JOBS   ?= $(shell nproc)
 
 # OpenMP threads that sleep at barriers instead of spinning: on a shared or loaded machine a
 # spinning team waiting for a descheduled thread made solves 10-100x slower (measured: jacobi-pcg
-# on cloth_hang 0.15 s passive vs 0.33-31 s active under load). Set it yourself to override.
+# on cloth_hang 0.15 s passive vs 0.33-31 s active under load). A short spin first (~0.3 ms):
+# with none, every parallel region pays a futex wake-up (120 us each here; harness/cli/
+# wait_policy.hpp). What build/xpbd-bench sets itself when started without a policy; set either
+# yourself to override.
 export OMP_WAIT_POLICY ?= passive
+export GOMP_SPINCOUNT ?= 10000
 
 .PHONY: setup build demo test test-asan fuzz clean figures perf perf-baseline
 

@@ -13,6 +13,7 @@
 // refresh, V-cycle, PCG iteration in SpMV units, both forms; --xb_budget seconds per kernel);
 // --xb_mode=smoothers: the smoother cost-per-digit table. Not a ctest: it takes minutes.
 #include "../harness/cli/run_setup.hpp"
+#include "../harness/cli/wait_policy.hpp"
 #include "../harness/sim/capture.hpp"
 #include "../harness/io/system_io.hpp"
 #include "../core/error.hpp"
@@ -184,6 +185,7 @@ void parse_args(int argc, char** argv, Config& c, std::vector<char*>& rest) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  xb::ensure_bounded_wait_policy(argv);
   Config c;
   std::vector<char*> rest{argv[0]};
   try {

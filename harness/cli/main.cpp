@@ -1,15 +1,14 @@
 // xpbd-bench: the command-line entry point. Bad input ends with one line naming what is wrong
 // and exit code 2; nothing already written is lost.
 #include "commands.hpp"
+#include "wait_policy.hpp"
 
 #include "../../core/error.hpp"
 #include "../../solvers/mpi/distributed.hpp"
 
 #include <mpi.h>
 
-#include <unistd.h>
 
-#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -32,30 +31,6 @@ const Command commands[] = {
     {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5"},
 };
 
-// OpenMP threads must sleep at barriers, not spin: on a loaded machine a spinning team waiting for
-// a descheduled thread made the same solve 7x slower (16.5 s instead of 2.3 s). libgomp reads
-// OMP_WAIT_POLICY in its load-time constructor, before main, so setting it here is too late for
-// this process: when the user has not chosen a policy, set `passive` and re-execute this binary
-// (same pid, argv and environment, so an mpirun launch stays intact) before MPI_Init or any
-// OpenMP call. GOMP_SPINCOUNT is left alone: under `passive` libgomp's spin count is already 0
-// unless the user sets GOMP_SPINCOUNT, and that, like an explicit OMP_WAIT_POLICY, is their choice.
-// Loop guard: XB_WAIT_POLICY_REEXEC holds the pid that re-executed; the new image (same pid)
-// sees it, never re-executes again, and removes it so that child processes start clean.
-void ensure_passive_wait_policy(char** argv) {
-  constexpr const char* marker = "XB_WAIT_POLICY_REEXEC";
-  const std::string pid = std::to_string(::getpid());
-  const char* m = std::getenv(marker);
-  const bool reexecuted = m && pid == m;
-  if (m) ::unsetenv(marker);
-  if (reexecuted || std::getenv("OMP_WAIT_POLICY")) return;
-  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0 || ::setenv(marker, pid.c_str(), 1) != 0) return;
-  ::execv("/proc/self/exe", argv);
-  // Only reached if execv failed: run on with the runtime's default policy, which the run's
-  // provenance (omp_wait_policy = default) and `report` then show.
-  ::unsetenv("OMP_WAIT_POLICY");
-  ::unsetenv(marker);
-}
-
 void usage(std::ostream& os) {
   os << "usage: xpbd-bench COMMAND [options]\n";
   for (const auto& c : commands) os << "  " << c.usage << "\n";
@@ -63,7 +38,7 @@ void usage(std::ostream& os) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ensure_passive_wait_policy(argv);
+  xb::ensure_bounded_wait_policy(argv);
   MPI_Init(&argc, &argv);
   // Under mpirun, ranks > 0 only serve the distributed solvers (hypre, muelu) of rank 0.
   if (xb::mpi_rank() > 0) {

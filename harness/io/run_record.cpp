@@ -40,11 +40,12 @@ std::string now_iso() {
 }
 
 // What the timings of this process ran under, taken once at load time (before main, so before
-// any work): the OpenMP wait policy the runtime read from the environment (libgomp reads it at
-// load time too; harness/main.cpp re-executes with `passive` when none was set) and the machine's
-// one-minute load average.
+// any work): the OpenMP wait policy and spin count the runtime read from the environment (libgomp
+// reads them at load time too; harness/cli/wait_policy.hpp re-executes with `passive` and a bounded
+// spin when no policy was set) and the machine's one-minute load average.
 struct ProcessStart {
   std::string omp_wait_policy;  // lower case; "default" when unset or empty (the runtime spins, then sleeps)
+  std::string omp_spin_count;   // GOMP_SPINCOUNT as set; "default" when unset (the policy's own)
   double load_average = -1;     // < 0: /proc/loadavg unreadable
   long long cpu_count = 0;
 };
@@ -55,6 +56,8 @@ ProcessStart read_process_start() {
       if (!std::isspace(static_cast<unsigned char>(*c))) s.omp_wait_policy += static_cast<char>(std::tolower(static_cast<unsigned char>(*c)));
   }
   if (s.omp_wait_policy.empty()) s.omp_wait_policy = "default";
+  const char* spin = std::getenv("GOMP_SPINCOUNT");
+  s.omp_spin_count = spin && *spin ? spin : "default";
   if (std::FILE* f = std::fopen("/proc/loadavg", "r")) {
     if (std::fscanf(f, "%lf", &s.load_average) != 1) s.load_average = -1;
     std::fclose(f);
@@ -76,6 +79,7 @@ void add_provenance(RunRecord& r, const Params& p) {
   r.attrs["machine"] = machine_description();
   r.attrs["omp_threads"] = static_cast<long long>(omp_get_max_threads());
   r.attrs["omp_wait_policy"] = process_start.omp_wait_policy;
+  r.attrs["omp_spin_count"] = process_start.omp_spin_count;
   if (process_start.load_average >= 0) r.attrs["load_average"] = process_start.load_average;
   r.attrs["cpu_count"] = process_start.cpu_count;
   r.attrs["created"] = now_iso();

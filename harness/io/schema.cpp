@@ -26,7 +26,7 @@ const ResultsSchema& results_schema() {
   // runs' (summary, local-method details, the reference, sweeps), then linear runs' (solve).
   static const ResultsSchema s = {
       expand({
-          {"any", "string", {"level", "scene", "solver", "form_used", "status", "message", "git_sha", "machine", "created", "omp_wait_policy"}},
+          {"any", "string", {"level", "scene", "solver", "form_used", "status", "message", "git_sha", "machine", "created", "omp_wait_policy", "omp_spin_count"}},
           {"any", "int", {"omp_threads", "cpu_count"}},
           {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "mpi_ranks", "setup_count", "refresh_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "primal_rows", "primal_nonzeros"}},
           {"any", "number", {"rows"}},

@@ -1,5 +1,6 @@
 // The end-to-end harness through its CLI: the stalling that motivates the paper, the report's
 // JSON contract, and bad input (one line, non-zero exit, nothing written or lost).
+#include "harness/cli/wait_policy.hpp"
 #include "harness/io/recorder.hpp"
 
 #include <gtest/gtest.h>
@@ -123,18 +124,22 @@ TEST(Cli, BadInputIsOneLineNonZeroAndWritesNothing) {
   EXPECT_EQ(xb::read_runs(out).size(), 1u);
 }
 
-// However the binary is started, its OpenMP threads sleep at barriers (harness/main.cpp sets
-// OMP_WAIT_POLICY=passive and re-executes when it is unset), and every run records the policy
-// the runtime read, the load average at start and the CPU count. The recorded value is read
-// before main, so `passive` from a binary started without the variable proves the re-exec.
+// However the binary is started, its OpenMP threads sleep at barriers after a bounded spin
+// (harness/cli/wait_policy.hpp sets OMP_WAIT_POLICY=passive and GOMP_SPINCOUNT=10000 and
+// re-executes when no policy is set; a spin count or policy the user set is kept), and every run
+// records the policy and spin count the runtime read, the load average at start and the CPU
+// count. The recorded values are read before main, so `passive` from a binary started without the
+// variable proves the re-exec.
 TEST(Cli, RunRecordsWaitPolicyLoadAndCpusHoweverStarted) {
   struct Case {
-    std::string env, policy;
+    std::string env, policy, spin;
   };
-  for (const Case& c : {Case{"env -u OMP_WAIT_POLICY ", "passive"}, Case{"env OMP_WAIT_POLICY=active ", "active"},
-                        Case{"env OMP_WAIT_POLICY=passive ", "passive"},
+  for (const Case& c : {Case{"env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT ", "passive", xb::kSpinCount},
+                        Case{"env -u GOMP_SPINCOUNT OMP_WAIT_POLICY=active ", "active", "default"},
+                        Case{"env -u GOMP_SPINCOUNT OMP_WAIT_POLICY=passive ", "passive", "default"},
+                        Case{"env -u OMP_WAIT_POLICY GOMP_SPINCOUNT=500 ", "passive", "500"},
                         // A stale loop-guard marker (not this process's pid) must not stop the re-exec.
-                        Case{"env -u OMP_WAIT_POLICY XB_WAIT_POLICY_REEXEC=1 ", "passive"}}) {
+                        Case{"env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT XB_WAIT_POLICY_REEXEC=1 ", "passive", xb::kSpinCount}}) {
     const std::string out = tmpfile("policy.h5");
     fs::remove(out);
     const Result r = sh("run --scene cloth_hang --solver jacobi-pcg --set resolution=6 --out " + out, c.env);
@@ -142,6 +147,7 @@ TEST(Cli, RunRecordsWaitPolicyLoadAndCpusHoweverStarted) {
     const auto runs = xb::read_runs(out);
     ASSERT_EQ(runs.size(), 1u);
     EXPECT_EQ(text(runs[0], "omp_wait_policy"), c.policy) << c.env;
+    EXPECT_EQ(text(runs[0], "omp_spin_count"), c.spin) << c.env;
     EXPECT_EQ(number(runs[0], "cpu_count"), static_cast<double>(::sysconf(_SC_NPROCESSORS_ONLN))) << c.env;
     const double load = number(runs[0], "load_average");
     EXPECT_GE(load, 0.0) << c.env;
