@@ -92,7 +92,22 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
   if (opt_.coarse_solver == "smoother") levels_.back().smoother = make_smoother(opt_.smoother, *levels_.back().A, levels_.back().nodes);
+  build_blocks();
   finish_levels();
+}
+
+void Hierarchy::build_blocks() {
+  for (size_t l = 0; l < levels_.size(); ++l) {
+    Level& L = levels_[l];
+    if (L.nodes.scalar()) continue;
+    L.A_blocks.build(*L.A, L.nodes, L.nodes);
+    if (l + 1 < levels_.size()) {
+      const NodeLayout coarse{L.T.col_start};
+      L.P_blocks.build(L.T.P, L.nodes, coarse);
+      L.R_blocks.build(L.T.R, coarse, L.nodes);
+    }
+    if (L.smoother) L.smoother->use_blocks(L.A_blocks.empty() ? nullptr : &L.A_blocks);
+  }
 }
 
 void Hierarchy::finish_levels() {

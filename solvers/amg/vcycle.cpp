@@ -10,15 +10,21 @@
 namespace xb::amg {
 
 namespace {
-// r = b − A x, then b_c = R r (both parallel over rows on the levels big enough to pay for it).
+// r = b − A x, then b_c = R r (both parallel over rows on the levels big enough to pay for it);
+// by node blocks where the level has them.
 template <class S>
-void residual_restrict(const CsrOf<S>& A, const CsrOf<S>& R, const VectorOf<S>& x, const VectorOf<S>& b,
-                       VectorOf<S>& r, VectorOf<S>& bc) {
+void residual_restrict(const Level& L, const CsrOf<S>& A, const CsrOf<S>& R, const VectorOf<S>& x,
+                       const VectorOf<S>& b, VectorOf<S>& r, VectorOf<S>& bc) {
   const int n = static_cast<int>(A.rows()), nc = static_cast<int>(R.rows());
-  const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr(), *ro = R.outerIndexPtr(), *rc = R.innerIndexPtr();
-  const S *av = A.valuePtr(), *rv = R.valuePtr();
   r.resize(n);
   bc.resize(nc);
+  if (!L.A_blocks.empty() && !L.R_blocks.empty()) {
+    block_residual(L.A_blocks, A, x.data(), b.data(), r.data());
+    block_multiply(L.R_blocks, R, r.data(), bc.data(), false);
+    return;
+  }
+  const int *ao = A.outerIndexPtr(), *ac = A.innerIndexPtr(), *ro = R.outerIndexPtr(), *rc = R.innerIndexPtr();
+  const S *av = A.valuePtr(), *rv = R.valuePtr();
 #pragma omp parallel if (n > kMinParallelRows)
   {
 #pragma omp for schedule(static)
@@ -38,7 +44,11 @@ void residual_restrict(const CsrOf<S>& A, const CsrOf<S>& R, const VectorOf<S>& 
 
 // x += P x_c
 template <class S>
-void prolongate_add(const CsrOf<S>& P, const VectorOf<S>& xc, VectorOf<S>& x) {
+void prolongate_add(const Level& L, const CsrOf<S>& P, const VectorOf<S>& xc, VectorOf<S>& x) {
+  if (!L.P_blocks.empty()) {
+    block_multiply(L.P_blocks, P, xc.data(), x.data(), true);
+    return;
+  }
   const int n = static_cast<int>(P.rows());
   const int *po = P.outerIndexPtr(), *pc = P.innerIndexPtr();
   const S* pv = P.valuePtr();
@@ -82,12 +92,12 @@ void Hierarchy::vcycle(const Vector& b, Vector& x) {
     Vector& xl = sol(l);
     xl.resize(L.A->rows());
     L.smoother->presmooth(*L.A, rhs(l), xl, true);
-    residual_restrict(*L.A, L.T.R, xl, rhs(l), L.r, levels_[l + 1].b);
+    residual_restrict(L, *L.A, L.T.R, xl, rhs(l), L.r, levels_[l + 1].b);
   }
   coarse_solve(levels_[nl - 1].b, levels_[nl - 1].x);
   for (int l = nl - 2; l >= 0; --l) {
     Level& L = levels_[l];
-    prolongate_add(L.T.P, levels_[l + 1].x, sol(l));
+    prolongate_add(L, L.T.P, levels_[l + 1].x, sol(l));
     L.smoother->postsmooth(*L.A, rhs(l), sol(l));
   }
 }
@@ -113,7 +123,7 @@ void Hierarchy::vcycle_single(const Vector& b, Vector& x) {
     SingleLevel& F = levels_[l].single;
     F.x.resize(F.A.rows());
     F.relax.presmooth(F.A, F.b, F.x, true);
-    residual_restrict(F.A, F.R, F.x, F.b, F.r, levels_[l + 1].single.b);
+    residual_restrict(levels_[l], F.A, F.R, F.x, F.b, F.r, levels_[l + 1].single.b);
   }
   Level& C = levels_[nl - 1];
   C.b = C.single.b.cast<double>();
@@ -121,7 +131,7 @@ void Hierarchy::vcycle_single(const Vector& b, Vector& x) {
   C.single.x = C.x.cast<float>();
   for (int l = nl - 2; l >= 0; --l) {
     SingleLevel& F = levels_[l].single;
-    prolongate_add(F.P, levels_[l + 1].single.x, F.x);
+    prolongate_add(levels_[l], F.P, levels_[l + 1].single.x, F.x);
     F.relax.postsmooth(F.A, F.b, F.x);
   }
   x = levels_[0].single.x.cast<double>();

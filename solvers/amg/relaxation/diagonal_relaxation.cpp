@@ -1,6 +1,7 @@
 #include "diagonal_relaxation.hpp"
 
 #include "../../kernels.hpp"
+#include "../block_kernels.hpp"
 #include "smoothers.hpp"
 
 #include <omp.h>
@@ -27,6 +28,10 @@ void DiagonalRelaxation<S>::step(const CsrOf<S>& A, const VectorOf<S>& b, const 
         dp[i] = static_cast<S>(c1 == 0 ? s : c1 * dp[i] + s);
       }
     }
+    return;
+  }
+  if (blocks) {
+    block_relax_step(*blocks, A, block_inv.data(), offset.data(), bp, xp, c1, c2, dp);
     return;
   }
   // Node by node: the node's residual rows, then its block of D⁻¹.
@@ -115,6 +120,7 @@ DiagonalRelaxation<float> to_single(const DiagonalRelaxation<double>& r) {
   f.node_start = r.node_start;
   f.offset = r.offset;
   f.block_inv.assign(r.block_inv.begin(), r.block_inv.end());
+  f.blocks = r.blocks;
   return f;
 }
 

@@ -11,6 +11,8 @@
 
 namespace xb::amg {
 
+struct BlockOperator;
+
 template <class S>
 using CsrOf = Eigen::SparseMatrix<S, Eigen::RowMajor, int>;
 template <class S>
@@ -28,6 +30,9 @@ struct DiagonalRelaxation {
   std::vector<int> node_start;
   std::vector<long> offset;
   std::vector<S> block_inv;
+  // A's node blocks (block_kernels.hpp), when A is node-block CSR in node_start's layout: the
+  // step then reads A by blocks. Not owned.
+  const BlockOperator* blocks = nullptr;
 
   // x_zero: x is zero on entry (one product with A saved).
   void presmooth(const CsrOf<S>& A, const VectorOf<S>& b, VectorOf<S>& x, bool x_zero);

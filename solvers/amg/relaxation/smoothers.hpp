@@ -62,6 +62,9 @@ class Smoother {
   // The polynomial kinds' relaxation (jacobi, chebyshev and their block forms; null for the
   // Gauss–Seidel kinds): what the V-cycle's single-precision copy is made from.
   virtual const DiagonalRelaxation<double>* relaxation() const { return nullptr; }
+  // A's node blocks (the level's, which outlives the smoother's use of them): the block
+  // polynomial kinds then read A by blocks; the others ignore them.
+  virtual void use_blocks(const BlockOperator*) {}
 };
 
 struct SmootherOptions {
@@ -85,6 +88,9 @@ class PolynomialSmoother : public Smoother {
     relax_.presmooth(A, b, x, x_zero);
   }
   void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { relax_.postsmooth(A, b, x); }
+  void use_blocks(const BlockOperator* op) override {
+    if (block_diagonal()) relax_.blocks = op;
+  }
 
  protected:
   explicit PolynomialSmoother(const SmootherOptions& opt, bool chebyshev) : opt_(opt) {
