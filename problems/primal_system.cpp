@@ -65,44 +65,72 @@ void PrimalSystem::build_incidence() {
 
 void PrimalSystem::build_pattern() {
   const int nb = static_cast<int>(free_.size());
-  // Per node row: (column node, term) pairs of every shared constraint, sorted by column.
-  std::vector<std::vector<std::pair<int, std::int64_t>>> row(nb);
-#pragma omp parallel for schedule(dynamic, 256)
-  for (int p = 0; p < nb; ++p) {
-    auto& r = row[p];
-    r.push_back({p, -1});  // the mass block exists even without constraints
+  // The free column nodes q of node row p's constraints, each once (mark, per thread, is stamped
+  // with p, so it needs no reset), p itself first: the mass block exists even without constraints.
+  auto for_each_column = [&](int p, std::vector<int>& mark, auto&& f) {
+    mark[p] = p;
+    f(p);
     for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
-      const int j = inc_[k] >> 2, sp = inc_[k] & 3;
+      const int j = inc_[k] >> 2;
       for (int sq = 0; sq < 4; ++sq) {
         const int q = graph_.particles[j][sq];
-        if (q >= 0 && block_of_[q] >= 0) r.push_back({block_of_[q], std::int64_t(j) << 4 | sp << 2 | sq});
+        if (q >= 0 && block_of_[q] >= 0 && mark[block_of_[q]] != p) {
+          mark[block_of_[q]] = p;
+          f(block_of_[q]);
+        }
       }
     }
-    std::stable_sort(r.begin(), r.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  }
+  };
   block_start_.assign(nb + 1, 0);
-  for (int p = 0; p < nb; ++p) {
-    int blocks = 0;
-    for (size_t k = 0; k < row[p].size(); ++k) blocks += k == 0 || row[p][k].first != row[p][k - 1].first;
-    block_start_[p + 1] = block_start_[p] + blocks;
+#pragma omp parallel
+  {
+    std::vector<int> mark(nb, -1);
+#pragma omp for schedule(static)
+    for (int p = 0; p < nb; ++p) for_each_column(p, mark, [&](int) { ++block_start_[p + 1]; });
   }
+  std::partial_sum(block_start_.begin(), block_start_.end(), block_start_.begin());
   const int nblk = block_start_[nb];
   block_col_.resize(nblk);
   term_start_.assign(nblk + 1, 0);
-  for (int p = 0; p < nb; ++p) {
-    int blk = block_start_[p] - 1;
-    for (size_t k = 0; k < row[p].size(); ++k) {
-      if (k == 0 || row[p][k].first != row[p][k - 1].first) block_col_[++blk] = row[p][k].first;
-      if (row[p][k].second >= 0) ++term_start_[blk + 1];
+  // Per row: its sorted columns, then per block the number of terms (constraint, slot_p, slot_q).
+#pragma omp parallel
+  {
+    std::vector<int> mark(nb, -1), pos(nb);
+#pragma omp for schedule(static)
+    for (int p = 0; p < nb; ++p) {
+      int* cols = block_col_.data() + block_start_[p];
+      int n = 0;
+      for_each_column(p, mark, [&](int q) { cols[n++] = q; });
+      std::sort(cols, cols + n);
+      for (int k = 0; k < n; ++k) pos[cols[k]] = block_start_[p] + k;
+      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
+        const int j = inc_[k] >> 2;
+        for (int sq = 0; sq < 4; ++sq) {
+          const int q = graph_.particles[j][sq];
+          if (q >= 0 && block_of_[q] >= 0) ++term_start_[pos[block_of_[q]] + 1];
+        }
+      }
     }
   }
   std::partial_sum(term_start_.begin(), term_start_.end(), term_start_.begin());
+  // The terms of each block in incidence order (constraints ascending, then slot_q): blocks (p, q)
+  // and (q, p) list the same constraints in the same order, so fill() makes them exact transposes.
   terms_.resize(term_start_[nblk]);
-  for (int p = 0; p < nb; ++p) {
-    int blk = block_start_[p] - 1, pos = 0;
-    for (size_t k = 0; k < row[p].size(); ++k) {
-      if (k == 0 || row[p][k].first != row[p][k - 1].first) pos = term_start_[++blk];
-      if (row[p][k].second >= 0) terms_[pos++] = row[p][k].second;
+#pragma omp parallel
+  {
+    std::vector<int> pos(nb), next;
+#pragma omp for schedule(static)
+    for (int p = 0; p < nb; ++p) {
+      const int b0 = block_start_[p], n = block_start_[p + 1] - b0;
+      next.assign(term_start_.begin() + b0, term_start_.begin() + b0 + n);
+      for (int k = 0; k < n; ++k) pos[block_col_[b0 + k]] = k;
+      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
+        const int j = inc_[k] >> 2, sp = inc_[k] & 3;
+        for (int sq = 0; sq < 4; ++sq) {
+          const int q = graph_.particles[j][sq];
+          if (q >= 0 && block_of_[q] >= 0) terms_[next[pos[block_of_[q]]]++] = std::int64_t(j) << 4 | sp << 2 | sq;
+        }
+      }
     }
   }
 
@@ -111,6 +139,7 @@ void PrimalSystem::build_pattern() {
   K_.resizeNonZeros(9L * nblk);
   int* outer = K_.outerIndexPtr();
   int* cols = K_.innerIndexPtr();
+#pragma omp parallel for schedule(static)
   for (int p = 0; p < nb; ++p) {
     const int nbp = block_start_[p + 1] - block_start_[p];
     for (int r = 0; r < 3; ++r) {
