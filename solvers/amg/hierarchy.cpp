@@ -91,23 +91,17 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   info_.near_kernel = nullptr;  // valid during setup only
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
-  if (opt_.coarse_solver == "smoother") levels_.back().smoother = make_smoother(opt_.smoother, *levels_.back().A, levels_.back().nodes);
-  build_blocks();
+  if (opt_.coarse_solver == "smoother") make_level_smoother(levels_.back());
   finish_levels();
 }
 
-void Hierarchy::build_blocks() {
-  for (size_t l = 0; l < levels_.size(); ++l) {
-    Level& L = levels_[l];
-    if (L.nodes.scalar()) continue;
-    L.A_blocks.build(*L.A, L.nodes, L.nodes);
-    if (l + 1 < levels_.size()) {
-      const NodeLayout coarse{L.T.col_start};
-      L.P_blocks.build(L.T.P, L.nodes, coarse);
-      L.R_blocks.build(L.T.R, coarse, L.nodes);
-    }
-    if (L.smoother) L.smoother->use_blocks(L.A_blocks.empty() ? nullptr : &L.A_blocks);
+void Hierarchy::make_level_smoother(Level& L) {
+  L.A_blocks.reset();
+  if (!L.nodes.scalar()) {
+    L.A_blocks = std::make_unique<BlockOperator>();
+    if (!L.A_blocks->build(*L.A, L.nodes, L.nodes)) L.A_blocks.reset();
   }
+  L.smoother = make_smoother(opt_.smoother, *L.A, L.nodes, L.A_blocks.get());
 }
 
 void Hierarchy::finish_levels() {
@@ -143,7 +137,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   Tentative T = tentative_prolongator(agg, B);
   const int nc = static_cast<int>(T.P.cols());
   if (nc == 0 || nc >= n) return false;       // no coarsening progress
-  L.smoother = make_smoother(opt_.smoother, Al, L.nodes);
+  make_level_smoother(L);
   if (opt_.prolongator == "smoothed") {
     // Where the smoother's D is the prolongator's, its λ_max(D⁻¹A) is reused: no second Lanczos.
     const bool block_p = opt_.prolongator_diagonal == JacobiDiagonal::Block && !L.nodes.scalar();
@@ -162,7 +156,11 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     L.galerkin.build(Al, T.P, T.R, next.A_own);
   else
     L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
-  if (!L.nodes.scalar()) next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns
+  if (!L.nodes.scalar()) {
+    next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns
+    L.P_blocks.build(T.P, L.nodes, next.nodes);
+    L.R_blocks.build(T.R, next.nodes, L.nodes);
+  }
   B = T.B_coarse;
   L.aggregates = std::move(agg);
   L.T = std::move(T);

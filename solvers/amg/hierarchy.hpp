@@ -115,9 +115,11 @@ struct Level {
   AggregateGalerkin galerkin;
   GalerkinProduct product;          // otherwise: the general product with its cached pattern
   std::unique_ptr<Smoother> smoother;
-  // Block levels: A, P and R by node blocks for the V-cycle's kernels (each empty where its
-  // matrix is not node-block CSR; the scalar kernels run then).
-  BlockOperator A_blocks, P_blocks, R_blocks;
+  // Block levels: A, P and R by node blocks for the V-cycle's kernels and the block smoothers
+  // (null or empty where the matrix is not node-block CSR: the scalar kernels run then). A's on
+  // the heap: its smoother keeps a pointer while the levels vector grows.
+  std::unique_ptr<BlockOperator> A_blocks;
+  BlockOperator P_blocks, R_blocks;
   Vector x, b, r;                   // V-cycle work vectors
   SingleLevel single;               // amg.precision = single only
 };
@@ -147,8 +149,8 @@ class Hierarchy {
   // Builds level l+1 from level l; false when level l cannot be coarsened (it stays coarsest).
   bool coarsen(Eigen::MatrixXd& B);
   void factor_coarsest();
-  // After setup: the block operators of the block levels, handed to their smoothers.
-  void build_blocks();
+  // Level l's smoother, on a block level with A's node blocks (built here) to read A by.
+  void make_level_smoother(Level& L);
   // After setup or refresh: the coarsest level's factor (coarse_solver = direct), the shared λ of
   // jacobi_omega = level0, then the float copies of precision = single, which take that λ.
   void finish_levels();

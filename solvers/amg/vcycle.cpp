@@ -18,8 +18,8 @@ void residual_restrict(const Level& L, const CsrOf<S>& A, const CsrOf<S>& R, con
   const int n = static_cast<int>(A.rows()), nc = static_cast<int>(R.rows());
   r.resize(n);
   bc.resize(nc);
-  if (!L.A_blocks.empty() && !L.R_blocks.empty()) {
-    block_residual(L.A_blocks, A, x.data(), b.data(), r.data());
+  if (L.A_blocks && !L.R_blocks.empty()) {
+    block_residual(*L.A_blocks, A, x.data(), b.data(), r.data());
     block_multiply(L.R_blocks, R, r.data(), bc.data(), false);
     return;
   }

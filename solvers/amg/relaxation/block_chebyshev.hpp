@@ -11,9 +11,10 @@
 
 namespace xb::amg {
 
-// opt.kind block_jacobi or block_chebyshev. Throws xb::Error if a diagonal block is not positive
-// definite or no positive λ_max estimate is found.
+// opt.kind block_jacobi or block_chebyshev; blocks: A's node blocks (not owned, outliving the
+// smoother), which its Lanczos and relaxation steps then read A by, or null. Throws xb::Error if a
+// diagonal block is not positive definite or no positive λ_max estimate is found.
 std::unique_ptr<Smoother> make_block_diagonal_smoother(const SmootherOptions& opt, const SparseMatrix& A,
-                                                       const NodeLayout& nodes);
+                                                       const NodeLayout& nodes, const BlockOperator* blocks);
 
 }  // namespace xb::amg

@@ -70,7 +70,8 @@ void apply_blocks(const std::vector<int>& start, const std::vector<long>& offset
 void BlockDiagonal::apply_inverse(const Vector& x, Vector& y) const { apply_blocks(start_, offset_, inv_, x, y); }
 void BlockDiagonal::apply(const Vector& x, Vector& y) const { apply_blocks(start_, offset_, block_, x, y); }
 
-double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector& v, int iterations, unsigned seed) {
+double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector& v, int iterations, unsigned seed,
+                           const BlockOperator* blocks) {
   const long n = A.rows();
   if (n == 0) return 0;
   Vector Dx(n);
@@ -82,7 +83,7 @@ double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector
     D.apply_inverse(Aq, w);
     w -= a * q + beta * q_prev;
   };
-  const double bound = lanczos_lambda_max(A, v, iterations, seed, dnorm, step);
+  const double bound = lanczos_lambda_max(A, v, iterations, seed, dnorm, step, blocks);
   if (std::isnan(bound)) throw Error("block Lanczos: the tridiagonal eigenproblem failed");
   return bound;
 }

@@ -10,6 +10,8 @@
 
 namespace xb::amg {
 
+struct BlockOperator;
+
 class BlockDiagonal {
  public:
   // A scalar layout gives 1×1 blocks. Throws xb::Error if a block is not positive definite.
@@ -43,6 +45,8 @@ class BlockDiagonal {
 // Upper estimate of λ_max(D⁻¹A) for the block D: Lanczos on D⁻¹A in the D inner product (where
 // it is self-adjoint), largest Ritz value plus its residual bound — as estimate_lambda_max does for
 // the scalar diagonal. v: start vector, updated (zero or wrong size: a seeded random one).
-double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector& v, int iterations, unsigned seed);
+// blocks: A's node blocks for its products, or null.
+double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector& v, int iterations, unsigned seed,
+                           const BlockOperator* blocks = nullptr);
 
 }  // namespace xb::amg

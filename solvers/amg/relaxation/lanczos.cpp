@@ -13,7 +13,7 @@
 namespace xb::amg {
 
 double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsigned seed, const DNorm& dnorm,
-                          const LanczosStep& step) {
+                          const LanczosStep& step, const BlockOperator* blocks) {
   const long n = A.rows();
   if (v.size() != n || v.squaredNorm() == 0) {
     std::mt19937_64 rng(seed * 7919ull + 17);
@@ -28,7 +28,10 @@ double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsi
   double beta_prev = 0;
   for (int k = 0; k < steps; ++k) {
     basis.push_back(q);
-    spmv(A, q, Aq);
+    if (blocks)
+      block_multiply(*blocks, A, q.data(), Aq.data(), false);
+    else
+      spmv(A, q, Aq);
     const double a = dot(q, Aq);  // ⟨q, D⁻¹Aq⟩_D
     step(Aq, q, q_prev, a, beta_prev, w);
     const double b = dnorm(w);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "../../../core/sparse.hpp"
+#include "../block_kernels.hpp"
 
 #include <functional>
 
@@ -18,8 +19,8 @@ using LanczosStep =
 // and the largest Ritz value plus its residual bound. v becomes the top Ritz vector, the start of
 // the next estimate (from the last Lanczos vector, nearly orthogonal to the top eigenvector, a
 // refresh underestimated λ_max by up to 35% on coarse levels of K). NaN if the tridiagonal
-// eigenproblem fails.
+// eigenproblem fails. blocks: A's node blocks, for its products (block_kernels.hpp), or null.
 double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsigned seed, const DNorm& dnorm,
-                          const LanczosStep& step);
+                          const LanczosStep& step, const BlockOperator* blocks = nullptr);
 
 }  // namespace xb::amg

@@ -62,9 +62,6 @@ class Smoother {
   // The polynomial kinds' relaxation (jacobi, chebyshev and their block forms; null for the
   // Gauss–Seidel kinds): what the V-cycle's single-precision copy is made from.
   virtual const DiagonalRelaxation<double>* relaxation() const { return nullptr; }
-  // A's node blocks (the level's, which outlives the smoother's use of them): the block
-  // polynomial kinds then read A by blocks; the others ignore them.
-  virtual void use_blocks(const BlockOperator*) {}
 };
 
 struct SmootherOptions {
@@ -88,9 +85,6 @@ class PolynomialSmoother : public Smoother {
     relax_.presmooth(A, b, x, x_zero);
   }
   void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) override { relax_.postsmooth(A, b, x); }
-  void use_blocks(const BlockOperator* op) override {
-    if (block_diagonal()) relax_.blocks = op;
-  }
 
  protected:
   explicit PolynomialSmoother(const SmootherOptions& opt, bool chebyshev) : opt_(opt) {
@@ -109,8 +103,10 @@ class PolynomialSmoother : public Smoother {
 // The smoother kinds make_smoother knows, for messages: "jacobi, chebyshev, ...".
 extern const char* const kSmootherKinds;
 
-// `nodes`: the level's node layout (the block kinds' D; scalar: 1×1 blocks). Throws xb::Error
-// naming amg.smoother for an unknown kind.
-std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes = {});
+// `nodes`: the level's node layout (the block kinds' D; scalar: 1×1 blocks). `blocks`: A's node
+// blocks in that layout (not owned, outliving the smoother) for block_jacobi and block_chebyshev
+// to read A by, or null. Throws xb::Error naming amg.smoother for an unknown kind.
+std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes = {},
+                                        const BlockOperator* blocks = nullptr);
 
 }  // namespace xb::amg

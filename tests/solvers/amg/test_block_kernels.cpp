@@ -5,6 +5,7 @@
 #include "solvers/amg/block_kernels.hpp"
 #include "solvers/amg/galerkin.hpp"
 #include "solvers/amg/hierarchy.hpp"
+#include "solvers/amg/relaxation/block_diagonal.hpp"
 #include "test_amg_primal.hpp"
 
 #include "amg_test_support.hpp"
@@ -120,8 +121,8 @@ TEST(AmgBlockKernels, BuildRefusesWhatIsNotBlocks) {
   EXPECT_TRUE(op.empty());
 }
 
-// Every level of a primal hierarchy runs the block kernels (A on every level, P and R on every
-// level but the coarsest); a dual (scalar) hierarchy runs none.
+// Every level of a primal hierarchy but the coarsest (a direct solve) runs the block kernels for
+// A, P and R; a dual (scalar) hierarchy runs none.
 TEST(AmgBlockKernels, PrimalHierarchyLevelsHaveBlockOperators) {
   const auto c = primal_case("cloth_hang", {{"resolution", "24"}}, 3, 0);
   AmgOptions opt;
@@ -133,11 +134,28 @@ TEST(AmgBlockKernels, PrimalHierarchyLevelsHaveBlockOperators) {
   h.setup(c.K, opt, info);
   ASSERT_GE(h.num_levels(), 3);
   for (int l = 0; l < h.num_levels(); ++l) {
-    EXPECT_FALSE(h.level(l).A_blocks.empty()) << "level " << l;
-    EXPECT_EQ(h.level(l).P_blocks.empty(), l + 1 == h.num_levels()) << "level " << l;
-    EXPECT_EQ(h.level(l).R_blocks.empty(), l + 1 == h.num_levels()) << "level " << l;
+    const bool coarsest = l + 1 == h.num_levels();
+    EXPECT_EQ(h.level(l).A_blocks == nullptr, coarsest) << "level " << l;
+    EXPECT_EQ(h.level(l).P_blocks.empty(), coarsest) << "level " << l;
+    EXPECT_EQ(h.level(l).R_blocks.empty(), coarsest) << "level " << l;
   }
   Hierarchy dual;
   dual.setup(c.A(), AmgOptions{});
-  for (int l = 0; l < dual.num_levels(); ++l) EXPECT_TRUE(dual.level(l).A_blocks.empty()) << "dual level " << l;
+  for (int l = 0; l < dual.num_levels(); ++l) EXPECT_EQ(dual.level(l).A_blocks, nullptr) << "dual level " << l;
+}
+
+// Lanczos reading K by blocks gives the scalar products' λ_max(D⁻¹K) estimate to round-off.
+TEST(AmgBlockKernels, LanczosByBlocksEqualsTheScalarEstimate) {
+  const SparseMatrix& K = bar().K;
+  const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K.rows()), 3);
+  BlockOperator op;
+  ASSERT_TRUE(op.build(K, nodes, nodes));
+  BlockDiagonal D;
+  D.build(K, nodes);
+  Vector v1, v2;
+  const double scalar = estimate_lambda_max(K, D, v1, 20, 1);
+  const double blocks = estimate_lambda_max(K, D, v2, 20, 1, &op);
+  EXPECT_GT(scalar, 1.0);  // D⁻¹K has λ_max above 1 (its diagonal blocks are I)
+  EXPECT_NEAR(blocks, scalar, 1e-10 * scalar);
+  EXPECT_LE((v1 - v2).norm(), 1e-8 * v1.norm());
 }
