@@ -74,14 +74,33 @@ double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector
                            const BlockOperator* blocks) {
   const long n = A.rows();
   if (n == 0) return 0;
-  Vector Dx(n);
+  // Each one parallel pass over the node blocks, no temporaries: xᵀDx, and D⁻¹Aq − a·q − β·q_prev.
+  const int nn = D.num_nodes();
   auto dnorm = [&](const Vector& x) {
-    D.apply(x, Dx);
-    return std::sqrt(std::max(0.0, dot(x, Dx)));
+    double s = 0;
+#pragma omp parallel for schedule(static) reduction(+ : s) if (n > kMinParallelRows)
+    for (int I = 0; I < nn; ++I) {
+      const int s0 = D.node_begin(I), b = D.node_end(I) - s0;
+      const double* M = D.block(I);
+      for (int r = 0; r < b; ++r) {
+        double acc = 0;
+        for (int c = 0; c < b; ++c) acc += M[r * b + c] * x[s0 + c];
+        s += x[s0 + r] * acc;
+      }
+    }
+    return std::sqrt(std::max(0.0, s));
   };
   auto step = [&](const Vector& Aq, const Vector& q, const Vector& q_prev, double a, double beta, Vector& w) {
-    D.apply_inverse(Aq, w);
-    w -= a * q + beta * q_prev;
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+    for (int I = 0; I < nn; ++I) {
+      const int s0 = D.node_begin(I), b = D.node_end(I) - s0;
+      const double* M = D.inverse_block(I);
+      for (int r = 0; r < b; ++r) {
+        double acc = 0;
+        for (int c = 0; c < b; ++c) acc += M[r * b + c] * Aq[s0 + c];
+        w[s0 + r] = acc - a * q[s0 + r] - beta * q_prev[s0 + r];
+      }
+    }
   };
   const double bound = lanczos_lambda_max(A, v, iterations, seed, dnorm, step, blocks);
   if (std::isnan(bound)) throw Error("block Lanczos: the tridiagonal eigenproblem failed");

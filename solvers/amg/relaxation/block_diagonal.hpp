@@ -27,8 +27,9 @@ class BlockDiagonal {
   double inverse(int I, int r, int s) const {
     return inv_[offset_[I] + r * (start_[I + 1] - start_[I]) + s];
   }
-  // D_I⁻¹, row-major b_I × b_I.
+  // D_I⁻¹ and D_I, row-major b_I × b_I.
   const double* inverse_block(int I) const { return inv_.data() + offset_[I]; }
+  const double* block(int I) const { return block_.data() + offset_[I]; }
   // The node starts, block offsets and row-major D_I⁻¹ blocks (DiagonalRelaxation's layout).
   void export_inverse(std::vector<int>& start, std::vector<long>& offset, std::vector<double>& inv) const {
     start = start_;

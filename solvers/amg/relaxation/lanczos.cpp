@@ -1,6 +1,7 @@
 #include "lanczos.hpp"
 
 #include "../../kernels.hpp"
+#include "smoothers.hpp"
 
 #include <Eigen/Dense>
 
@@ -24,10 +25,10 @@ double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsi
   const int steps = static_cast<int>(std::min<long>(n, std::max(iterations, 10)));
   Vector q = v / dnorm(v), q_prev = Vector::Zero(n), Aq(n), w(n);
   std::vector<double> alpha, beta;
-  std::vector<Vector> basis;  // for the top Ritz vector
+  Eigen::MatrixXd basis(n, steps);  // for the top Ritz vector
   double beta_prev = 0;
   for (int k = 0; k < steps; ++k) {
-    basis.push_back(q);
+    basis.col(k) = q;
     if (blocks)
       block_multiply(*blocks, A, q.data(), Aq.data(), false);
     else
@@ -38,8 +39,10 @@ double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsi
     alpha.push_back(a);
     beta.push_back(b);
     if (!(b > 1e-12 * std::abs(a)) || !std::isfinite(b)) break;  // invariant subspace found
-    q_prev = q;
-    q = w / b;
+    q_prev.swap(q);
+    const double inv_b = 1.0 / b;
+#pragma omp parallel for schedule(static) if (n > kMinParallelRows)
+    for (long i = 0; i < n; ++i) q[i] = inv_b * w[i];
     beta_prev = b;
   }
   const int m = static_cast<int>(alpha.size());
@@ -50,8 +53,7 @@ double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsi
   }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(T);
   if (es.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
-  v.setZero(n);
-  for (int k = 0; k < m; ++k) v += es.eigenvectors()(k, m - 1) * basis[k];
+  v.noalias() = basis.leftCols(m) * es.eigenvectors().col(m - 1);
   return es.eigenvalues()(m - 1) + std::abs(beta[m - 1] * es.eigenvectors()(m - 1, m - 1));
 }
 
