@@ -1,6 +1,7 @@
 #include "smoothed_prolongator.hpp"
 
 #include "../../core/error.hpp"
+#include "../kernels.hpp"
 #include "block_sparse.hpp"
 #include "galerkin.hpp"
 #include "relaxation/block_diagonal.hpp"
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <omp.h>
 
 namespace xb::amg {
 
@@ -18,17 +20,43 @@ SparseMatrix transpose(const SparseMatrix& A) {
   SparseMatrix T(m, n);
   T.resizeNonZeros(static_cast<int>(A.nonZeros()));
   int* to = T.outerIndexPtr();
-  std::fill(to, to + m + 1, 0);
-  for (int k = 0; k < ao[n]; ++k) ++to[ac[k] + 1];
-  for (int j = 0; j < m; ++j) to[j + 1] += to[j];
-  std::vector<int> fill(to, to + m);
-  // Rows in increasing order: every column of T comes out sorted.
-  for (int i = 0; i < n; ++i)
-    for (int k = ao[i]; k < ao[i + 1]; ++k) {
-      const int at = fill[ac[k]]++;
-      T.innerIndexPtr()[at] = i;
-      T.valuePtr()[at] = av[k];
+  int* tc = T.innerIndexPtr();
+  double* tv = T.valuePtr();
+  // A counting sort by column, parallel over row blocks: thread t counts its rows' entries per
+  // column, then writes them after those of threads < t. Rows stay in increasing order within
+  // every column of T (sorted columns), as a serial pass would leave them.
+  std::vector<std::vector<int>> start;
+#pragma omp parallel
+  {
+    const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+#pragma omp single
+    start.assign(nt, std::vector<int>(m + 1, 0));
+    int lo, hi;
+    row_block(ao, n, t, nt, lo, hi);
+    std::vector<int>& mine = start[t];
+    for (int k = ao[lo]; k < ao[hi]; ++k) ++mine[ac[k]];
+#pragma omp barrier
+#pragma omp single
+    {
+      // Column j of T: to[j], then thread 0's entries, thread 1's, ...
+      to[0] = 0;
+      for (int j = 0; j < m; ++j) {
+        int at = to[j];
+        for (int u = 0; u < nt; ++u) {
+          const int c = start[u][j];
+          start[u][j] = at;
+          at += c;
+        }
+        to[j + 1] = at;
+      }
     }
+    for (int i = lo; i < hi; ++i)
+      for (int k = ao[i]; k < ao[i + 1]; ++k) {
+        const int at = mine[ac[k]]++;
+        tc[at] = i;
+        tv[at] = av[k];
+      }
+  }
   return T;
 }
 

@@ -154,3 +154,30 @@ TEST(AmgBlockSparse, HierarchyLevelsEqualTheScalarGalerkinProducts) {
   }
   EXPECT_GT(small, 0);
 }
+
+// R = Pᵀ by the parallel counting sort equals Eigen's transpose exactly (pattern, sorted columns,
+// values), on the bar's smoothed P and on a wide random matrix with empty rows and columns.
+TEST(AmgBlockSparse, TransposeEqualsEigensExactly) {
+  const SparseMatrix& K = bar().K;
+  const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K.rows()), 3);
+  const Tentative T = tentative_with_small_aggregate(K, nodes, bar().rigid);
+  const SparseMatrix P = smooth_prolongator(K, T.P, JacobiDiagonal::Block, nodes, 20, 1).P;
+  std::vector<Eigen::Triplet<double>> trip;
+  const Vector r = xb::test::random_vector(30000, 11);
+  for (int k = 0; k < 10000; ++k) {
+    const int i = static_cast<int>(std::abs(r[3 * k]) * 4999), j = static_cast<int>(std::abs(r[3 * k + 1]) * 2999);
+    if (i % 7 != 3 && j % 5 != 2) trip.emplace_back(i, j, r[3 * k + 2]);  // empty rows and columns
+  }
+  SparseMatrix Wm(5000, 3000);
+  Wm.setFromTriplets(trip.begin(), trip.end());
+  const SparseMatrix& W = Wm;
+  for (const SparseMatrix* A : {&P, &W}) {
+    const SparseMatrix mine = transpose(*A), eigen = SparseMatrix(A->transpose());
+    ASSERT_EQ(mine.nonZeros(), eigen.nonZeros());
+    for (long i = 0; i <= mine.rows(); ++i) ASSERT_EQ(mine.outerIndexPtr()[i], eigen.outerIndexPtr()[i]);
+    for (long k = 0; k < mine.nonZeros(); ++k) {
+      ASSERT_EQ(mine.innerIndexPtr()[k], eigen.innerIndexPtr()[k]);
+      ASSERT_EQ(mine.valuePtr()[k], eigen.valuePtr()[k]);
+    }
+  }
+}
