@@ -133,7 +133,12 @@ void PrimalSystem::build_pattern() {
       }
     }
   }
+  build_csr();
+}
 
+void PrimalSystem::build_csr() {
+  const int nb = static_cast<int>(free_.size());
+  const int nblk = block_start_[nb];
   // Scalar CSR: node row p has 3 rows of 3·(its blocks) entries each, columns 3q, 3q+1, 3q+2.
   K_.resize(3 * nb, 3 * nb);
   K_.resizeNonZeros(9L * nblk);

@@ -70,7 +70,8 @@ class PrimalSystem {
 
  private:
   void build_incidence();  // free particles, their dof blocks, free particle → (constraint, slot)
-  void build_pattern();    // K's blocks, the terms of each, the scalar CSR pattern
+  void build_pattern();    // K's blocks and the terms of each, then build_csr()
+  void build_csr();        // K's scalar CSR pattern from its blocks (values zero)
   // out = sign · J (M⁻¹ if times_minv) v.
   void apply_J(const Gradients& grad, const Vector& v, double sign, bool times_minv, Vector& out) const;
 
