@@ -65,21 +65,28 @@ void PrimalSystem::build_incidence() {
 
 void PrimalSystem::build_pattern() {
   const int nb = static_cast<int>(free_.size());
-  // The free column nodes q of node row p's constraints, each once (mark, per thread, is stamped
-  // with p, so it needs no reset), p itself first: the mass block exists even without constraints.
+  // f(q, term) for every free particle q sharing a constraint with node row p, in incidence order
+  // (constraints ascending, then q's slot), term = constraint << 4 | slot_p << 2 | slot_q.
+  auto for_each_pair = [&](int p, auto&& f) {
+    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
+      const int j = inc_[k] >> 2, sp = inc_[k] & 3;
+      for (int sq = 0; sq < 4; ++sq) {
+        const int q = graph_.particles[j][sq];
+        if (q >= 0 && block_of_[q] >= 0) f(block_of_[q], std::int64_t(j) << 4 | sp << 2 | sq);
+      }
+    }
+  };
+  // The column nodes of node row p, each once (mark, per thread, is stamped with p, so it needs
+  // no reset), p itself first: the mass block exists even without constraints.
   auto for_each_column = [&](int p, std::vector<int>& mark, auto&& f) {
     mark[p] = p;
     f(p);
-    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
-      const int j = inc_[k] >> 2;
-      for (int sq = 0; sq < 4; ++sq) {
-        const int q = graph_.particles[j][sq];
-        if (q >= 0 && block_of_[q] >= 0 && mark[block_of_[q]] != p) {
-          mark[block_of_[q]] = p;
-          f(block_of_[q]);
-        }
+    for_each_pair(p, [&](int q, std::int64_t) {
+      if (mark[q] != p) {
+        mark[q] = p;
+        f(q);
       }
-    }
+    });
   };
   block_start_.assign(nb + 1, 0);
 #pragma omp parallel
@@ -103,34 +110,21 @@ void PrimalSystem::build_pattern() {
       for_each_column(p, mark, [&](int q) { cols[n++] = q; });
       std::sort(cols, cols + n);
       for (int k = 0; k < n; ++k) pos[cols[k]] = block_start_[p] + k;
-      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
-        const int j = inc_[k] >> 2;
-        for (int sq = 0; sq < 4; ++sq) {
-          const int q = graph_.particles[j][sq];
-          if (q >= 0 && block_of_[q] >= 0) ++term_start_[pos[block_of_[q]] + 1];
-        }
-      }
+      for_each_pair(p, [&](int q, std::int64_t) { ++term_start_[pos[q] + 1]; });
     }
   }
   std::partial_sum(term_start_.begin(), term_start_.end(), term_start_.begin());
-  // The terms of each block in incidence order (constraints ascending, then slot_q): blocks (p, q)
-  // and (q, p) list the same constraints in the same order, so fill() makes them exact transposes.
+  // The terms of each block in incidence order: blocks (p, q) and (q, p) list the same
+  // constraints in the same order, so fill() makes them exact transposes.
   terms_.resize(term_start_[nblk]);
+  std::vector<int> cursor(term_start_.begin(), term_start_.end() - 1);  // per block: its next term
 #pragma omp parallel
   {
-    std::vector<int> pos(nb), next;
+    std::vector<int> pos(nb);
 #pragma omp for schedule(static)
     for (int p = 0; p < nb; ++p) {
-      const int b0 = block_start_[p], n = block_start_[p + 1] - b0;
-      next.assign(term_start_.begin() + b0, term_start_.begin() + b0 + n);
-      for (int k = 0; k < n; ++k) pos[block_col_[b0 + k]] = k;
-      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
-        const int j = inc_[k] >> 2, sp = inc_[k] & 3;
-        for (int sq = 0; sq < 4; ++sq) {
-          const int q = graph_.particles[j][sq];
-          if (q >= 0 && block_of_[q] >= 0) terms_[next[pos[block_of_[q]]]++] = std::int64_t(j) << 4 | sp << 2 | sq;
-        }
-      }
+      for (int k = block_start_[p]; k < block_start_[p + 1]; ++k) pos[block_col_[k]] = k;
+      for_each_pair(p, [&](int q, std::int64_t term) { terms_[cursor[pos[q]]++] = term; });
     }
   }
   build_csr();

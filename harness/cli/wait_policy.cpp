@@ -17,16 +17,11 @@ void ensure_bounded_wait_policy(char** argv) {
   if (m) ::unsetenv(marker);
   if (reexecuted || std::getenv("OMP_WAIT_POLICY")) return;
   const bool set_spin = !std::getenv("GOMP_SPINCOUNT");
-  if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0 || (set_spin && ::setenv("GOMP_SPINCOUNT", kSpinCount, 1) != 0) ||
-      ::setenv(marker, pid.c_str(), 1) != 0) {
-    ::unsetenv("OMP_WAIT_POLICY");
-    if (set_spin) ::unsetenv("GOMP_SPINCOUNT");
-    ::unsetenv(marker);
-    return;
-  }
-  ::execv("/proc/self/exe", argv);
-  // Only reached if execv failed: run on with the runtime's default policy, which the run's
-  // provenance (omp_wait_policy = default) and `report` then show.
+  if (::setenv("OMP_WAIT_POLICY", "passive", 1) == 0 && (!set_spin || ::setenv("GOMP_SPINCOUNT", kSpinCount, 1) == 0) &&
+      ::setenv(marker, pid.c_str(), 1) == 0)
+    ::execv("/proc/self/exe", argv);
+  // Only reached if a setenv or execv failed: run on with the runtime's default policy, which the
+  // run's provenance (omp_wait_policy = default) and `report` then show.
   ::unsetenv("OMP_WAIT_POLICY");
   if (set_spin) ::unsetenv("GOMP_SPINCOUNT");
   ::unsetenv(marker);

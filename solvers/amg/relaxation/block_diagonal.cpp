@@ -50,6 +50,13 @@ void BlockDiagonal::build(const SparseMatrix& A, const NodeLayout& nodes) {
 }
 
 namespace {
+// Row r of a node's row-major b × b block M times x (the node's part of a vector).
+inline double block_row(const double* M, int b, const double* x, int r) {
+  double acc = 0;
+  for (int c = 0; c < b; ++c) acc += M[r * b + c] * x[c];
+  return acc;
+}
+
 void apply_blocks(const std::vector<int>& start, const std::vector<long>& offset, const std::vector<double>& blocks,
                   const Vector& x, Vector& y) {
   const int nn = static_cast<int>(start.size()) - 1;
@@ -57,12 +64,7 @@ void apply_blocks(const std::vector<int>& start, const std::vector<long>& offset
 #pragma omp parallel for schedule(static) if (nn > kMinParallelRows)
   for (int I = 0; I < nn; ++I) {
     const int s = start[I], b = start[I + 1] - s;
-    const double* M = blocks.data() + offset[I];
-    for (int r = 0; r < b; ++r) {
-      double acc = 0;
-      for (int c = 0; c < b; ++c) acc += M[r * b + c] * x[s + c];
-      y[s + r] = acc;
-    }
+    for (int r = 0; r < b; ++r) y[s + r] = block_row(blocks.data() + offset[I], b, x.data() + s, r);
   }
 }
 }  // namespace
@@ -81,12 +83,7 @@ double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector
 #pragma omp parallel for schedule(static) reduction(+ : s) if (n > kMinParallelRows)
     for (int I = 0; I < nn; ++I) {
       const int s0 = D.node_begin(I), b = D.node_end(I) - s0;
-      const double* M = D.block(I);
-      for (int r = 0; r < b; ++r) {
-        double acc = 0;
-        for (int c = 0; c < b; ++c) acc += M[r * b + c] * x[s0 + c];
-        s += x[s0 + r] * acc;
-      }
+      for (int r = 0; r < b; ++r) s += x[s0 + r] * block_row(D.block(I), b, x.data() + s0, r);
     }
     return std::sqrt(std::max(0.0, s));
   };
@@ -94,12 +91,8 @@ double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector
 #pragma omp parallel for schedule(static) if (n > kMinParallelRows)
     for (int I = 0; I < nn; ++I) {
       const int s0 = D.node_begin(I), b = D.node_end(I) - s0;
-      const double* M = D.inverse_block(I);
-      for (int r = 0; r < b; ++r) {
-        double acc = 0;
-        for (int c = 0; c < b; ++c) acc += M[r * b + c] * Aq[s0 + c];
-        w[s0 + r] = acc - a * q[s0 + r] - beta * q_prev[s0 + r];
-      }
+      for (int r = 0; r < b; ++r)
+        w[s0 + r] = block_row(D.inverse_block(I), b, Aq.data() + s0, r) - a * q[s0 + r] - beta * q_prev[s0 + r];
     }
   };
   const double bound = lanczos_lambda_max(A, v, iterations, seed, dnorm, step, blocks);
