@@ -14,6 +14,20 @@
 
 namespace xb::amg {
 
+namespace {
+// inv = D⁻¹ for a b × b row-major SPD block, by Cholesky. Fixed sizes for K's 3×3 nodes and the
+// rigid-mode levels' 6×6: the dynamic LLT's heap work per node was most of build() (6 ms of 7 on
+// cloth r160's 25.6K nodes).
+template <int B>
+bool invert_spd(const double* D, int b, double* inv) {
+  using Block = Eigen::Matrix<double, B, B, Eigen::RowMajor>;
+  const Eigen::LLT<Eigen::Matrix<double, B, B>> llt(Eigen::Map<const Block>(D, b, b));
+  if (llt.info() != Eigen::Success) return false;
+  Eigen::Map<Block>(inv, b, b) = llt.solve(Eigen::Matrix<double, B, B>::Identity(b, b));
+  return true;
+}
+}  // namespace
+
 void BlockDiagonal::build(const SparseMatrix& A, const NodeLayout& nodes) {
   const int n = static_cast<int>(A.rows());
   start_ = nodes.scalar() ? NodeLayout::uniform(n, 1).node_start : nodes.node_start;
@@ -38,13 +52,10 @@ void BlockDiagonal::build(const SparseMatrix& A, const NodeLayout& nodes) {
       const int* first = std::lower_bound(ac + ao[s + r], ac + ao[s + r + 1], s);
       for (const int* k = first; k < ac + ao[s + r + 1] && *k < s + b; ++k) Db(r, *k - s) = av[k - ac];
     }
-    Eigen::LLT<Eigen::MatrixXd> llt(Db);
-    if (b > 0 && llt.info() != Eigen::Success) {
-      bad = std::max(bad, I);
-      continue;
-    }
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(inv_.data() + offset_[I], b, b) =
-        llt.solve(Eigen::MatrixXd::Identity(b, b));
+    double* inv = inv_.data() + offset_[I];
+    const bool ok = b == 3 ? invert_spd<3>(Db.data(), b, inv) : b == 6 ? invert_spd<6>(Db.data(), b, inv)
+                                                                      : invert_spd<Eigen::Dynamic>(Db.data(), b, inv);
+    if (b > 0 && !ok) bad = std::max(bad, I);
   }
   if (bad >= 0) throw Error("block diagonal: the diagonal block of node " + std::to_string(bad) + " is not positive definite");
 }
