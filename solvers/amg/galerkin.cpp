@@ -95,12 +95,22 @@ void spgemm_values(const SparseMatrix& A, const SparseMatrix& B, SparseMatrix& C
 
 void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
                             const NodeLayout& fine, const NodeLayout& coarse) {
-  by_blocks_ = a_.build(A, fine, fine) && p_.build(P, fine, coarse) && r_.build(R, coarse, fine);
-  if (!by_blocks_) {
-    AP_ = spgemm(A, P);
-    Ac = spgemm(R, AP_);
+  BlockPattern pr, pa, pp;
+  if (pa.build(A, fine, fine) && pp.build(P, fine, coarse) && pr.build(R, coarse, fine)) {
+    build(R, A, P, Ac, pr, pa, pp);
     return;
   }
+  by_blocks_ = false;
+  AP_ = spgemm(A, P);
+  Ac = spgemm(R, AP_);
+}
+
+void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
+                            const BlockPattern& pr, const BlockPattern& pa, const BlockPattern& pp) {
+  by_blocks_ = true;
+  r_ = pr;
+  a_ = pa;
+  p_ = pp;
   AP_ = block_product(A, a_, P, p_, ap_);
   Ac = block_product(R, r_, AP_, ap_, ac_);
 }

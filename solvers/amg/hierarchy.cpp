@@ -140,27 +140,35 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   make_level_smoother(L);
   if (opt_.prolongator == "smoothed") {
     // Where the smoother's D is the prolongator's, its λ_max(D⁻¹A) is reused: no second Lanczos.
+    // Its node-block diagonal and A's block pattern as well.
     const bool block_p = opt_.prolongator_diagonal == JacobiDiagonal::Block && !L.nodes.scalar();
-    const double known = L.smoother->block_diagonal() == block_p ? L.smoother->lambda_max() : 0.0;
+    ProlongatorReuse reuse;
+    if ((L.smoother->block_diagonal() != nullptr) == block_p) {
+      reuse.lambda = L.smoother->lambda_max();
+      reuse.D = L.smoother->block_diagonal();
+    }
+    if (L.A_blocks) reuse.A_pattern = &L.A_blocks->pattern;
     SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,
-                                               opt_.smoother.power_iterations, opt_.smoother.seed, known,
-                                               NodeLayout{T.col_start});
+                                               opt_.smoother.power_iterations, opt_.smoother.seed,
+                                               NodeLayout{T.col_start}, reuse);
     T.P = std::move(S.P);
     T.R = std::move(S.R);
     T.max_row_entries = 0;
     for (int i = 0; i < n; ++i) T.max_row_entries = std::max(T.max_row_entries, static_cast<int>(T.P.row(i).nonZeros()));
   }
   Level next;
-  L.one_candidate = T.max_row_entries <= 1;
-  if (L.one_candidate)
-    L.galerkin.build(Al, T.P, T.R, next.A_own);
-  else
-    L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
   if (!L.nodes.scalar()) {
     next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns
     L.P_blocks.build(T.P, L.nodes, next.nodes);
     L.R_blocks.build(T.R, next.nodes, L.nodes);
   }
+  L.one_candidate = T.max_row_entries <= 1;
+  if (L.one_candidate)
+    L.galerkin.build(Al, T.P, T.R, next.A_own);
+  else if (L.A_blocks && !L.P_blocks.empty() && !L.R_blocks.empty())
+    L.product.build(T.R, Al, T.P, next.A_own, L.R_blocks.pattern, L.A_blocks->pattern, L.P_blocks.pattern);
+  else
+    L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
   B = T.B_coarse;
   L.aggregates = std::move(agg);
   L.T = std::move(T);

@@ -110,12 +110,17 @@ SparseMatrix block_scale_rows(const BlockDiagonal& D, const SparseMatrix& X) {
   return Y;
 }
 
-// X ← D⁻¹X in place, when the rows of each node share their columns (X seen as node blocks): per
-// node and column a b × b product, summed in block_scale_rows' order.
-void block_scale_node_rows(const BlockDiagonal& D, SparseMatrix& X) {
+// X ← T − ω D⁻¹X in X's storage, X = A·T by node blocks (pattern px; T's blocks pt): per node a
+// b × b product with D_I⁻¹ over the node's shared columns, scaled by −ω, then T's blocks added
+// where they sit in the row (A's diagonal blocks put every column of T's row into A·T's). The
+// values of add_scaled(T, −ω, D⁻¹X) in one pass.
+void jacobi_step_by_node_blocks(const BlockDiagonal& D, double omega, const SparseMatrix& T, const BlockPattern& pt,
+                                SparseMatrix& X, const BlockPattern& px) {
   const int nn = D.num_nodes();
-  const int* xo = X.outerIndexPtr();
-#pragma omp parallel
+  const int *xo = X.outerIndexPtr(), *to = T.outerIndexPtr();
+  const double* tv = T.valuePtr();
+  int missing = 0;
+#pragma omp parallel reduction(+ : missing)
   {
     std::vector<double> y;
 #pragma omp for schedule(dynamic, 256)
@@ -130,9 +135,22 @@ void block_scale_node_rows(const BlockDiagonal& D, SparseMatrix& X) {
           const double d = D.inverse(I, r, t);
           for (int q = 0; q < len; ++q) y[static_cast<size_t>(r) * len + q] += d * x[static_cast<size_t>(t) * len + q];
         }
-      std::copy(y.begin(), y.end(), x);
+      for (size_t k = 0; k < y.size(); ++k) x[k] = -omega * y[k];
+      for (int k = pt.ptr[I]; k < pt.ptr[I + 1]; ++k) {
+        const int* first = px.col.data() + px.ptr[I];
+        const int* at = std::lower_bound(first, px.col.data() + px.ptr[I + 1], pt.col[k]);
+        if (at == px.col.data() + px.ptr[I + 1] || *at != pt.col[k]) {
+          ++missing;
+          continue;
+        }
+        const int xoff = px.offset[at - px.col.data()], toff = pt.offset[k], w = pt.cols(pt.col[k]);
+        for (int r = 0; r < b; ++r)
+          for (int q = 0; q < w; ++q)
+            x[static_cast<size_t>(r) * len + xoff + q] = tv[to[s + r] + toff + q] + x[static_cast<size_t>(r) * len + xoff + q];
+      }
     }
   }
+  if (missing) throw Error("smoothed prolongator: A lacks a diagonal block (A·T does not hold T's pattern)");
 }
 
 // C = X + a·Y, patterns merged row by row (sorted columns in, sorted columns out).
@@ -201,37 +219,46 @@ bool add_scaled_in_place(const SparseMatrix& X, double a, SparseMatrix& Y) {
 
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
-                                       double known_lambda, const NodeLayout& coarse_nodes) {
+                                       const NodeLayout& coarse_nodes, const ProlongatorReuse& reuse) {
   if (A.rows() != T.rows()) throw Error("smoothed prolongator: A and T do not fit");
   SmoothedProlongator out;
   Vector v;
   // Block levels: A·T by node blocks (block_sparse.hpp), the same matrices as the scalar path.
-  BlockPattern pa, pt, pat;
-  const bool by_blocks = pa.build(A, nodes, nodes) && pt.build(T, nodes, coarse_nodes);
-  SparseMatrix DinvAT = by_blocks ? block_product(A, pa, T, pt, pat) : spgemm(A, T);
+  BlockPattern own_pa, pt, pat;
+  const BlockPattern* pa = reuse.A_pattern;
+  if (!pa && own_pa.build(A, nodes, nodes)) pa = &own_pa;
+  const bool by_blocks = pa && pt.build(T, nodes, coarse_nodes);
+  SparseMatrix AT = by_blocks ? block_product(A, *pa, T, pt, pat) : spgemm(A, T);
+  auto set_omega = [&] {
+    if (!(out.lambda > 0) || !std::isfinite(out.lambda))
+      throw Error("smoothed prolongator: no positive estimate of lambda_max(D^-1 A) (matrix not positive definite?)");
+    out.omega = 4.0 / (3.0 * out.lambda);
+  };
   if (diag == JacobiDiagonal::Block && !nodes.scalar()) {
-    BlockDiagonal D;
-    D.build(A, nodes);
-    out.lambda = known_lambda > 0 ? known_lambda : estimate_lambda_max(A, D, v, lanczos_steps, seed);
-    if (by_blocks)
-      block_scale_node_rows(D, DinvAT);
-    else
-      DinvAT = block_scale_rows(D, DinvAT);
+    BlockDiagonal own_D;
+    if (!reuse.D) own_D.build(A, nodes);
+    const BlockDiagonal& D = reuse.D ? *reuse.D : own_D;
+    out.lambda = reuse.lambda > 0 ? reuse.lambda : estimate_lambda_max(A, D, v, lanczos_steps, seed);
+    set_omega();
+    if (by_blocks) {
+      jacobi_step_by_node_blocks(D, out.omega, T, pt, AT, pat);
+      out.P = std::move(AT);
+    } else {
+      out.P = add_scaled(T, -out.omega, block_scale_rows(D, AT));
+    }
   } else {
     const Vector inv_diag = inverse_diagonal(A);
-    out.lambda = known_lambda > 0 ? known_lambda : estimate_lambda_max(A, inv_diag, v, lanczos_steps, seed);
-    const int n = static_cast<int>(DinvAT.rows());
+    out.lambda = reuse.lambda > 0 ? reuse.lambda : estimate_lambda_max(A, inv_diag, v, lanczos_steps, seed);
+    set_omega();
+    const int n = static_cast<int>(AT.rows());
 #pragma omp parallel for schedule(static)
     for (int i = 0; i < n; ++i)
-      for (int k = DinvAT.outerIndexPtr()[i]; k < DinvAT.outerIndexPtr()[i + 1]; ++k) DinvAT.valuePtr()[k] *= inv_diag[i];
+      for (int k = AT.outerIndexPtr()[i]; k < AT.outerIndexPtr()[i + 1]; ++k) AT.valuePtr()[k] *= inv_diag[i];
+    if (by_blocks && add_scaled_in_place(T, -out.omega, AT))
+      out.P = std::move(AT);
+    else
+      out.P = add_scaled(T, -out.omega, AT);
   }
-  if (!(out.lambda > 0) || !std::isfinite(out.lambda))
-    throw Error("smoothed prolongator: no positive estimate of lambda_max(D^-1 A) (matrix not positive definite?)");
-  out.omega = 4.0 / (3.0 * out.lambda);
-  if (by_blocks && add_scaled_in_place(T, -out.omega, DinvAT))
-    out.P = std::move(DinvAT);
-  else
-    out.P = add_scaled(T, -out.omega, DinvAT);
   out.R = transpose(out.P);  // as fast as a block transpose (measured): a counting sort
   return out;
 }

@@ -7,7 +7,9 @@
 // node, λ_max(D⁻¹A) estimated on the symmetric L⁻¹AL⁻ᵀ with D_I = L_I L_Iᵀ).
 #pragma once
 
+#include "block_sparse.hpp"
 #include "nodal.hpp"
+#include "relaxation/block_diagonal.hpp"
 #include "tentative.hpp"
 
 namespace xb::amg {
@@ -20,15 +22,21 @@ struct SmoothedProlongator {
   double lambda = 0;   // the λ_max(D⁻¹A) estimate
 };
 
+// What the level's smoother already holds for A, reused instead of computed again (each optional).
+struct ProlongatorReuse {
+  double lambda = 0;                        // > 0: λ_max(D⁻¹A) for this D
+  const BlockDiagonal* D = nullptr;         // A's node-block diagonal (JacobiDiagonal::Block)
+  const BlockPattern* A_pattern = nullptr;  // A's node blocks in `nodes`
+};
+
 // A: SPD. T: the tentative prolongator. `nodes` is needed for the block diagonal (a scalar
-// layout makes Block the same as Scalar). Lanczos steps and seed as for the smoothers;
-// known_lambda > 0 is a known λ_max(D⁻¹A) estimate for this D (the smoother's), reused.
+// layout makes Block the same as Scalar). Lanczos steps and seed as for the smoothers.
 // coarse_nodes: T's column nodes (Tentative::col_start); with block `nodes` the products run by
 // node blocks (block_sparse.hpp), giving the same P and R.
 // Throws xb::Error if A's diagonal (blocks) is not positive definite.
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
-                                       double known_lambda = 0, const NodeLayout& coarse_nodes = {});
+                                       const NodeLayout& coarse_nodes = {}, const ProlongatorReuse& reuse = {});
 
 // B = Aᵀ (parallel over A's columns is not needed: a counting sort, O(nnz)).
 SparseMatrix transpose(const SparseMatrix& A);

@@ -16,7 +16,7 @@ class BlockDiagonalSmoother final : public PolynomialSmoother {
     update(A, opt_.power_iterations);
   }
   void refresh(const SparseMatrix& A) override { update(A, opt_.refresh_power_iterations); }
-  bool block_diagonal() const override { return true; }
+  const BlockDiagonal* block_diagonal() const override { return &D_; }
 
  private:
   void update(const SparseMatrix& A, int lanczos_steps) {

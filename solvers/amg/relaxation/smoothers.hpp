@@ -22,6 +22,8 @@
 
 namespace xb::amg {
 
+class BlockDiagonal;
+
 // Loops shorter than this run on one thread: on coarse levels (tens to hundreds of rows) and in
 // small colour classes a parallel region costs more than the work it splits.
 constexpr long kMinParallelRows = 2048;
@@ -50,9 +52,9 @@ class Smoother {
   virtual void presmooth(const SparseMatrix& A, const Vector& b, Vector& x, bool x_zero) = 0;
   virtual void postsmooth(const SparseMatrix& A, const Vector& b, Vector& x) = 0;
   // The λ_max(D⁻¹A) estimate in use (0 for the Gauss–Seidel kinds); D is the scalar diagonal,
-  // or the node blocks where block_diagonal() says so.
+  // or the node blocks where block_diagonal() returns them (the smoothed prolongator reuses both).
   virtual double lambda_max() const { return 0; }
-  virtual bool block_diagonal() const { return false; }
+  virtual const BlockDiagonal* block_diagonal() const { return nullptr; }
   // jacobi and chebyshev: use this λ_max(D⁻¹A) instead of the level's own estimate until the next
   // refresh (amg.jacobi_omega = level0: level 0's on every level, as the authors do).
   virtual void set_lambda_max(double lambda);

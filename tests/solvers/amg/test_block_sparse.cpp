@@ -90,7 +90,7 @@ TEST(AmgBlockSparse, ProductsEqualTheScalarOnesWithUnequalCoarseNodes) {
   EXPECT_TRUE(g.by_blocks());
   expect_same(Ac, galerkin_product(T.R, K, T.P), "T^T K T");
   for (const JacobiDiagonal diag : {JacobiDiagonal::Scalar, JacobiDiagonal::Block}) {
-    const SmoothedProlongator S = smooth_prolongator(K, T.P, diag, nodes, 20, 1, 0, coarse);
+    const SmoothedProlongator S = smooth_prolongator(K, T.P, diag, nodes, 20, 1, coarse);
     const SmoothedProlongator ref = smooth_prolongator(K, T.P, diag, nodes, 20, 1);  // no coarse layout: scalar
     expect_same(S.P, ref.P, "smoothed P");
     expect_same(S.R, ref.R, "R = P^T");
@@ -119,7 +119,7 @@ TEST(AmgBlockSparse, RefreshEqualsAFreshProduct) {
   const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K1.rows()), 3);
   const Tentative T = tentative_with_small_aggregate(K1, nodes, bar().rigid);
   const NodeLayout coarse{T.col_start};
-  const SmoothedProlongator S = smooth_prolongator(K1, T.P, JacobiDiagonal::Scalar, nodes, 20, 1, 0, coarse);
+  const SmoothedProlongator S = smooth_prolongator(K1, T.P, JacobiDiagonal::Scalar, nodes, 20, 1, coarse);
   GalerkinProduct g, fresh;
   SparseMatrix Ac, Ac_fresh;
   g.build(S.R, K1, S.P, Ac, nodes, coarse);
