@@ -91,16 +91,21 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   info_.near_kernel = nullptr;  // valid during setup only
   // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
   for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
-  if (opt_.coarse_solver == "smoother") make_level_smoother(levels_.back());
+  if (opt_.coarse_solver == "smoother") {
+    build_level_blocks(levels_.back());
+    make_level_smoother(levels_.back());
+  }
   finish_levels();
 }
 
-void Hierarchy::make_level_smoother(Level& L) {
+void Hierarchy::build_level_blocks(Level& L) {
   L.A_blocks.reset();
-  if (!L.nodes.scalar()) {
-    L.A_blocks = std::make_unique<BlockOperator>();
-    if (!L.A_blocks->build(*L.A, L.nodes, L.nodes)) L.A_blocks.reset();
-  }
+  if (L.nodes.scalar()) return;
+  L.A_blocks = std::make_unique<BlockOperator>();
+  if (!L.A_blocks->build(*L.A, L.nodes, L.nodes)) L.A_blocks.reset();
+}
+
+void Hierarchy::make_level_smoother(Level& L) {
   L.smoother = make_smoother(opt_.smoother, *L.A, L.nodes, L.A_blocks.get());
 }
 
@@ -124,15 +129,18 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   if (static_cast<int>(levels_.size()) >= opt_.max_levels || n <= opt_.max_coarse) return false;
   if (levels_.size() == 1)
     B = near_kernel_candidates(Al, opt_.near_kernel, nullptr, info_.block_size, info_.near_kernel);
+  build_level_blocks(L);
   const AggregationRule rule = aggregation_rule(opt_.aggregation);
   const double nodal_theta = levels_.size() > 1 && opt_.coarse_nodal_strength_threshold >= 0
                                  ? opt_.coarse_nodal_strength_threshold
                                  : opt_.nodal_strength_threshold;
+  SparseMatrix N;  // block levels: the node graph, from A's node blocks where they are built
+  if (!L.nodes.scalar()) N = L.A_blocks ? node_matrix(Al, L.A_blocks->pattern) : node_matrix(Al, L.nodes);
   Aggregates agg = L.nodes.scalar() ? rule(strength_symmetric(Al, opt_.strength_threshold))
-                                    : nodal_aggregation(Al, L.nodes, nodal_theta, rule);
+                                    : aggregate_nodes(N, L.nodes, nodal_theta, rule);
   if (!L.nodes.scalar() && levels_.size() > 1 && nodal_theta > 0 &&
       L.nodes.num_nodes() < opt_.min_coarsening * agg.num_aggregates)
-    agg = nodal_aggregation(Al, L.nodes, 0.0, rule);
+    agg = aggregate_nodes(N, L.nodes, 0.0, rule);
   if (agg.num_aggregates == 0) return false;  // every row isolated: nothing to coarsen onto
   Tentative T = tentative_prolongator(agg, B);
   const int nc = static_cast<int>(T.P.cols());

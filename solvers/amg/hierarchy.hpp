@@ -149,7 +149,10 @@ class Hierarchy {
   // Builds level l+1 from level l; false when level l cannot be coarsened (it stays coarsest).
   bool coarsen(Eigen::MatrixXd& B);
   void factor_coarsest();
-  // Level l's smoother, on a block level with A's node blocks (built here) to read A by.
+  // A's node blocks on a block level (null where A is not node-block CSR): for the node graph of
+  // the aggregation, the block smoothers, the prolongator and the V-cycle's kernels.
+  void build_level_blocks(Level& L);
+  // Level l's smoother (block levels read A by its node blocks).
   void make_level_smoother(Level& L);
   // After setup or refresh: the coarsest level's factor (coarse_solver = direct), the shared λ of
   // jacobi_omega = level0, then the float copies of precision = single, which take that λ.

@@ -1,6 +1,7 @@
 #include "nodal.hpp"
 
 #include "../../core/error.hpp"
+#include "block_sparse.hpp"
 #include "strength.hpp"
 
 #include <algorithm>
@@ -66,6 +67,25 @@ SparseMatrix node_matrix(const SparseMatrix& A, const NodeLayout& nodes) {
   return N;
 }
 
+SparseMatrix node_matrix(const SparseMatrix& A, const BlockPattern& blocks) {
+  const int nn = blocks.row_nodes();
+  const int* ao = A.outerIndexPtr();
+  const double* av = A.valuePtr();
+  SparseMatrix N(nn, static_cast<int>(blocks.col_start.size()) - 1);
+  N.resizeNonZeros(blocks.ptr[nn]);
+  std::copy(blocks.ptr.begin(), blocks.ptr.end(), N.outerIndexPtr());
+  std::copy(blocks.col.begin(), blocks.col.end(), N.innerIndexPtr());
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nn; ++I)
+    for (int k = blocks.ptr[I]; k < blocks.ptr[I + 1]; ++k) {
+      double s = 0;  // row by row, as node_matrix(A, nodes) sums
+      for (int r = blocks.row_start[I]; r < blocks.row_start[I + 1]; ++r)
+        for (int q = 0; q < blocks.cols(blocks.col[k]); ++q) s += av[ao[r] + blocks.offset[k] + q] * av[ao[r] + blocks.offset[k] + q];
+      N.valuePtr()[k] = std::sqrt(s);
+    }
+  return N;
+}
+
 Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout& nodes) {
   const int nn = nodes.num_nodes();
   if (static_cast<int>(node_aggregates.aggregate.size()) != nn) throw Error("nodal aggregation: sizes differ");
@@ -80,9 +100,12 @@ Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout
   return out;
 }
 
+Aggregates aggregate_nodes(const SparseMatrix& N, const NodeLayout& nodes, double theta, AggregationRule rule) {
+  return expand_aggregates(rule(strength_symmetric(N, theta)), nodes);
+}
+
 Aggregates nodal_aggregation(const SparseMatrix& A, const NodeLayout& nodes, double theta, AggregationRule rule) {
-  const SparseMatrix S = strength_symmetric(node_matrix(A, nodes), theta);
-  return expand_aggregates(rule(S), nodes);
+  return aggregate_nodes(node_matrix(A, nodes), nodes, theta, rule);
 }
 
 }  // namespace xb::amg

@@ -15,6 +15,8 @@
 
 namespace xb::amg {
 
+struct BlockPattern;
+
 // node_start[I] … node_start[I+1]−1 are node I's rows. Empty means "scalar" (one row per node).
 struct NodeLayout {
   std::vector<int> node_start;
@@ -26,12 +28,16 @@ struct NodeLayout {
 // The node matrix: entry (I, J) = Frobenius norm of A's block (I, J) (stored entries only).
 // Throws xb::Error if the layout does not cover A's rows.
 SparseMatrix node_matrix(const SparseMatrix& A, const NodeLayout& nodes);
+// The same from A's node-block pattern (no search for the blocks): the same values.
+SparseMatrix node_matrix(const SparseMatrix& A, const BlockPattern& blocks);
 
 // Aggregates of nodes → aggregates of rows (an isolated node's rows are isolated; roots become
 // the first row of the root node).
 Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout& nodes);
 
-// Strength (the symmetric rule on node_matrix), then `rule` on the node graph, then expansion.
+// Strength (the symmetric rule on the node matrix N), then `rule` on the node graph, then expansion.
+Aggregates aggregate_nodes(const SparseMatrix& N, const NodeLayout& nodes, double theta, AggregationRule rule);
+// The same on A's node_matrix.
 Aggregates nodal_aggregation(const SparseMatrix& A, const NodeLayout& nodes, double theta, AggregationRule rule);
 
 }  // namespace xb::amg

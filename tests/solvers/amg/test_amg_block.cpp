@@ -2,6 +2,7 @@
 // rigid-mode tentative prolongator, the smoothed prolongator, the cached Galerkin product and the
 // block V-cycle, against dense computations.
 #include "solvers/amg/relaxation/block_diagonal.hpp"
+#include "solvers/amg/block_sparse.hpp"
 #include "solvers/amg/galerkin.hpp"
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/amg/nodal.hpp"
@@ -47,6 +48,17 @@ TEST(AmgNodal, NodeMatrixIsTheBlockFrobeniusNorm) {
     for (int J = 0; J < nn; ++J) ref(I, J) = Kd.block<3, 3>(3 * I, 3 * J).norm();
   EXPECT_LE(rel(Dense(N), ref), 1e-14);
   EXPECT_THROW(NodeLayout::uniform(10, 3), Error);
+  // From the node-block pattern (the hierarchy's path): the same pattern, the same values.
+  BlockPattern p;
+  ASSERT_TRUE(p.build(K, nodes, nodes));
+  const SparseMatrix Nb = node_matrix(K, p);
+  ASSERT_EQ(Nb.nonZeros(), N.nonZeros());
+  for (int I = 0; I < nn; ++I)
+    for (int k = N.outerIndexPtr()[I]; k < N.outerIndexPtr()[I + 1]; ++k) {
+      ASSERT_EQ(Nb.outerIndexPtr()[I], N.outerIndexPtr()[I]);
+      EXPECT_EQ(Nb.innerIndexPtr()[k], N.innerIndexPtr()[k]);
+      EXPECT_EQ(Nb.valuePtr()[k], N.valuePtr()[k]);
+    }
 }
 
 TEST(AmgNodal, AggregatesKeepParticlesWholeAndMatchScalarAggregationOfTheNodeGraph) {
