@@ -79,8 +79,10 @@ SparseMatrix node_matrix(const SparseMatrix& A, const BlockPattern& blocks) {
   for (int I = 0; I < nn; ++I)
     for (int k = blocks.ptr[I]; k < blocks.ptr[I + 1]; ++k) {
       double s = 0;  // row by row, as node_matrix(A, nodes) sums
-      for (int r = blocks.row_start[I]; r < blocks.row_start[I + 1]; ++r)
-        for (int q = 0; q < blocks.cols(blocks.col[k]); ++q) s += av[ao[r] + blocks.offset[k] + q] * av[ao[r] + blocks.offset[k] + q];
+      for (int r = blocks.row_start[I]; r < blocks.row_start[I + 1]; ++r) {
+        const double* a = av + ao[r] + blocks.offset[k];
+        for (int q = 0; q < blocks.cols(blocks.col[k]); ++q) s += a[q] * a[q];
+      }
       N.valuePtr()[k] = std::sqrt(s);
     }
   return N;

@@ -144,9 +144,11 @@ void jacobi_step_by_node_blocks(const BlockDiagonal& D, double omega, const Spar
           continue;
         }
         const int xoff = px.offset[at - px.col.data()], toff = pt.offset[k], w = pt.cols(pt.col[k]);
-        for (int r = 0; r < b; ++r)
-          for (int q = 0; q < w; ++q)
-            x[static_cast<size_t>(r) * len + xoff + q] = tv[to[s + r] + toff + q] + x[static_cast<size_t>(r) * len + xoff + q];
+        for (int r = 0; r < b; ++r) {
+          double* xr = x + static_cast<size_t>(r) * len + xoff;
+          const double* tr = tv + to[s + r] + toff;
+          for (int q = 0; q < w; ++q) xr[q] = tr[q] + xr[q];
+        }
       }
     }
   }
