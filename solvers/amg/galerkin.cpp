@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <omp.h>
+#include <utility>
 
 namespace xb::amg {
 
@@ -97,7 +98,7 @@ void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const 
                             const NodeLayout& fine, const NodeLayout& coarse) {
   BlockPattern pr, pa, pp;
   if (pa.build(A, fine, fine) && pp.build(P, fine, coarse) && pr.build(R, coarse, fine)) {
-    build(R, A, P, Ac, pr, pa, pp);
+    build(R, A, P, Ac, std::move(pr), std::move(pa), std::move(pp));
     return;
   }
   by_blocks_ = false;
@@ -106,11 +107,11 @@ void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const 
 }
 
 void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
-                            const BlockPattern& pr, const BlockPattern& pa, const BlockPattern& pp) {
+                            BlockPattern pr, BlockPattern pa, BlockPattern pp) {
   by_blocks_ = true;
-  r_ = pr;
-  a_ = pa;
-  p_ = pp;
+  r_ = std::move(pr);
+  a_ = std::move(pa);
+  p_ = std::move(pp);
   AP_ = block_product(A, a_, P, p_, ap_);
   Ac = block_product(R, r_, AP_, ap_, ac_);
 }

@@ -35,9 +35,9 @@ class GalerkinProduct {
   void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
              const NodeLayout& fine = {}, const NodeLayout& coarse = {});
   // The same by node blocks, with the block patterns of R, A and P already built (the V-cycle's
-  // BlockOperators hold them).
-  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
-             const BlockPattern& pr, const BlockPattern& pa, const BlockPattern& pp);
+  // BlockOperators hold them); kept for refresh().
+  void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac, BlockPattern pr,
+             BlockPattern pa, BlockPattern pp);
   void refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
   bool by_blocks() const { return by_blocks_; }
 

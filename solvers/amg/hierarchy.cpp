@@ -151,9 +151,10 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     // Its node-block diagonal and A's block pattern as well.
     const bool block_p = opt_.prolongator_diagonal == JacobiDiagonal::Block && !L.nodes.scalar();
     ProlongatorReuse reuse;
-    if ((L.smoother->block_diagonal() != nullptr) == block_p) {
+    const BlockDiagonal* smoother_D = L.smoother->block_diagonal();
+    if ((smoother_D != nullptr) == block_p) {
       reuse.lambda = L.smoother->lambda_max();
-      reuse.D = L.smoother->block_diagonal();
+      reuse.D = smoother_D;
     }
     if (L.A_blocks) reuse.A_pattern = &L.A_blocks->pattern;
     SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,

@@ -137,9 +137,9 @@ void jacobi_step_by_node_blocks(const BlockDiagonal& D, double omega, const Spar
         }
       for (size_t k = 0; k < y.size(); ++k) x[k] = -omega * y[k];
       for (int k = pt.ptr[I]; k < pt.ptr[I + 1]; ++k) {
-        const int* first = px.col.data() + px.ptr[I];
-        const int* at = std::lower_bound(first, px.col.data() + px.ptr[I + 1], pt.col[k]);
-        if (at == px.col.data() + px.ptr[I + 1] || *at != pt.col[k]) {
+        const int *first = px.col.data() + px.ptr[I], *last = px.col.data() + px.ptr[I + 1];
+        const int* at = std::lower_bound(first, last, pt.col[k]);
+        if (at == last || *at != pt.col[k]) {
           ++missing;
           continue;
         }
