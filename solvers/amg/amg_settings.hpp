@@ -20,7 +20,8 @@ struct AmgSettings {
   std::string prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
   double nodal_strength_threshold = 0.0;         // block systems (primal K), level 0
   double coarse_nodal_strength_threshold = 0.1;  // levels >= 1 (< 0: the level-0 value)
-  double min_coarsening = 4;  // levels >= 1: fewer nodes per aggregate than this → redone at theta 0
+  double min_coarsening = 4;  // fewer nodes per aggregate than this → redone at theta 0 (levels >= 1), then merged
+  double drop_tolerance = 1e-10;  // block level 0: relative size of a node block treated as zero
   std::string prolongator_diagonal = "block";    // D of the smoothed P: block | scalar
   std::string smoother = "auto";  // auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
   int smoother_sweeps = 0;        // 0: auto (1)

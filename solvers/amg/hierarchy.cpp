@@ -21,6 +21,7 @@ AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
   o.nodal_strength_threshold = p.amg.nodal_strength_threshold;
   o.coarse_nodal_strength_threshold = p.amg.coarse_nodal_strength_threshold;
   o.min_coarsening = p.amg.min_coarsening;
+  o.drop_tolerance = p.amg.drop_tolerance;
   o.prolongator_diagonal = p.amg.prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
   o.smoother.kind = p.amg.smoother;
   o.smoother.sweeps = p.amg.smoother_sweeps;
@@ -84,7 +85,20 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   levels_.clear();
   levels_.emplace_back();
   levels_[0].A = &A;
-  if (info.block_size > 1) levels_[0].nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info.block_size);
+  fine_nnz_ = A.nonZeros();
+  filtered_ = false;
+  if (info.block_size > 1) {
+    Level& L0 = levels_[0];
+    L0.nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info.block_size);
+    if (opt_.drop_tolerance > 0) {
+      build_level_blocks(L0);
+      filtered_ = L0.A_blocks && filter_.build(A, L0.A_blocks->pattern, opt_.drop_tolerance);
+      if (filtered_) {
+        L0.A = &filter_.matrix();
+        L0.A_blocks.reset();  // coarsen() builds A_F's
+      }
+    }
+  }
   Eigen::MatrixXd B;
   while (coarsen(B)) {
   }
@@ -129,18 +143,22 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   if (static_cast<int>(levels_.size()) >= opt_.max_levels || n <= opt_.max_coarse) return false;
   if (levels_.size() == 1)
     B = near_kernel_candidates(Al, opt_.near_kernel, nullptr, info_.block_size, info_.near_kernel);
-  build_level_blocks(L);
+  if (!L.A_blocks) build_level_blocks(L);  // level 0's may be built by setup()
   const AggregationRule rule = aggregation_rule(opt_.aggregation);
   const double nodal_theta = levels_.size() > 1 && opt_.coarse_nodal_strength_threshold >= 0
                                  ? opt_.coarse_nodal_strength_threshold
                                  : opt_.nodal_strength_threshold;
   SparseMatrix N;  // block levels: the node graph, from A's node blocks where they are built
   if (!L.nodes.scalar()) N = L.A_blocks ? node_matrix(Al, L.A_blocks->pattern) : node_matrix(Al, L.nodes);
-  Aggregates agg = L.nodes.scalar() ? rule(strength_symmetric(Al, opt_.strength_threshold))
-                                    : aggregate_nodes(N, L.nodes, nodal_theta, rule);
-  if (!L.nodes.scalar() && levels_.size() > 1 && nodal_theta > 0 &&
-      L.nodes.num_nodes() < opt_.min_coarsening * agg.num_aggregates)
-    agg = aggregate_nodes(N, L.nodes, 0.0, rule);
+  Aggregates agg;
+  if (L.nodes.scalar()) {
+    agg = rule(strength_symmetric(Al, opt_.strength_threshold));
+  } else {
+    const bool redo = levels_.size() > 1 && nodal_theta > 0;  // θ = 0 first, then merge
+    agg = aggregate_nodes(N, L.nodes, nodal_theta, rule, redo ? 0.0 : opt_.min_coarsening);
+    if (redo && L.nodes.num_nodes() < opt_.min_coarsening * agg.num_aggregates)
+      agg = aggregate_nodes(N, L.nodes, 0.0, rule, opt_.min_coarsening);
+  }
   if (agg.num_aggregates == 0) return false;  // every row isolated: nothing to coarsen onto
   Tentative T = tentative_prolongator(agg, B);
   const int nc = static_cast<int>(T.P.cols());
@@ -188,9 +206,10 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
 
 void Hierarchy::refresh(const SparseMatrix& A) {
   if (levels_.empty()) throw Error("mgpbd: refresh before setup");
-  if (A.rows() != levels_[0].A->rows() || A.nonZeros() != levels_[0].A->nonZeros())
+  if (A.rows() != levels_[0].A->rows() || A.nonZeros() != fine_nnz_)
     throw Error("mgpbd: refresh with a different sparsity pattern (a full setup is needed)");
-  levels_[0].A = &A;
+  if (filtered_) filter_.refresh(A);
+  levels_[0].A = filtered_ ? &filter_.matrix() : &A;
   for (size_t l = 0; l + 1 < levels_.size(); ++l) {
     Level& L = levels_[l];
     Level& next = levels_[l + 1];
@@ -237,7 +256,7 @@ double Hierarchy::operator_complexity() const {
   if (levels_.empty()) return 0;
   double s = 0;
   for (const auto& L : levels_) s += static_cast<double>(L.A->nonZeros());
-  return s / static_cast<double>(levels_[0].A->nonZeros());
+  return s / static_cast<double>(fine_nnz_);
 }
 
 double Hierarchy::grid_complexity() const {

@@ -20,6 +20,7 @@
 #include "smoothed_prolongator.hpp"
 #include "relaxation/smoothers.hpp"
 #include "tentative.hpp"
+#include "zero_filter.hpp"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
@@ -44,11 +45,17 @@ struct AmgOptions {
   // a smoothed P couple neighbours of neighbours, so θ = 0 there merges ~25 aggregates into one
   // (squash bunny:12k: 924 → 36 rows, 54 PCG iterations); 0.1 gives 924 → 156 and 36 iterations.
   double coarse_nodal_strength_threshold = 0.1;
-  // Levels ≥ 1: a nodal aggregation at that θ with fewer than this many nodes per aggregate is
-  // redone at θ = 0. Slow coarsening under a smoothed P fills the next operator in: the stretched
-  // bar (bar_hang r16) went 792 → 286 nodes at θ = 0.1, its level 2 43% dense, operator
-  // complexity 2.11; redone at θ = 0 it is 1.40 with the same 29 PCG iterations. 0 = never.
+  // A nodal aggregation with fewer than this many nodes per aggregate coarsens too slowly: a
+  // smoothed P then fills the next operator in. On levels ≥ 1 it is first redone at θ = 0 (the
+  // stretched bar, bar_hang r16, went 792 → 286 nodes at θ = 0.1, its level 2 43% dense); if it
+  // is still below (on any level: couplings along lines only, as the filtered bar's), its
+  // aggregates are aggregated again on the graph of their couplings until it is not. 0 = never.
   double min_coarsening = 4;
+  // Block systems, level 0: node blocks below this fraction of their diagonals' geometric mean
+  // are dropped, their norms lumped onto the diagonal (zero_filter.hpp). Round-off zeros are
+  // ≤ 1e-14 there (bar_hang); the smallest real coupling on the captured systems is 3e-6 (squash
+  // bunny:50k). 0 = keep every block.
+  double drop_tolerance = 1e-10;
   std::string aggregation = "standard";
   NearKernelOptions near_kernel;      // kind "auto": rigid on a block system with a basis, else ones
   std::string prolongator = "auto";   // auto (smoothed on block systems, else tentative) | tentative | smoothed
@@ -67,7 +74,7 @@ struct AmgOptions {
   // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
   std::string precision = "double";
   // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
-  // amg.coarse_nodal_strength_threshold, amg.min_coarsening, amg.aggregation, amg.near_kernel*,
+  // amg.coarse_nodal_strength_threshold, amg.min_coarsening, amg.drop_tolerance, amg.aggregation, amg.near_kernel*,
   // amg.prolongator, amg.prolongator_diagonal, amg.smoother*, amg.chebyshev_degree,
   // amg.max_coarse, amg.max_levels, amg.coarse_solver, amg.jacobi_omega, amg.precision, seed).
   static AmgOptions from_settings(const SolverSettings& p);
@@ -130,6 +137,9 @@ class Hierarchy {
   void setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info = {});
   // A: same pattern as at setup(), new values. Throws xb::Error if the pattern size changed.
   void refresh(const SparseMatrix& A);
+  // Whether refresh(A) keeps a hierarchy fit for A: false when level 0 dropped blocks
+  // (amg.drop_tolerance) that A's values no longer make negligible (a full setup is due).
+  bool refreshable(const SparseMatrix& A) const { return !filtered_ || filter_.holds(A); }
   // One V-cycle from x = 0 (Algorithm 2): x ≈ A⁻¹ b. The operator b ↦ x is symmetric positive
   // definite for every smoother, so it can precondition CG. Defined in vcycle.cpp.
   void vcycle(const Vector& b, Vector& x);
@@ -140,7 +150,8 @@ class Hierarchy {
   const Level& level(int l) const { return levels_[l]; }
   const SparseMatrix& matrix(int l) const { return *levels_[l].A; }
   const AmgOptions& options() const { return opt_; }
-  double operator_complexity() const;  // Σ nnz(A_l) / nnz(A_0)
+  // Σ nnz(A_l) / nnz(A), A the caller's matrix (level 0 holds A_F where amg.drop_tolerance dropped blocks).
+  double operator_complexity() const;
   double grid_complexity() const;      // Σ rows(A_l) / rows(A_0)
   std::vector<double> level_rows() const;
   std::vector<double> level_nnz() const;
@@ -168,6 +179,9 @@ class Hierarchy {
   AmgOptions opt_;  // resolved
   MatrixInfo info_;
   std::vector<Level> levels_;
+  ZeroBlockFilter filter_;  // level 0's A_F, when blocks were dropped
+  bool filtered_ = false;
+  long fine_nnz_ = 0;       // the caller's A
   // Coarsest level: dense Cholesky while small (the usual case, ≤ max_coarse rows), sparse LDLᵀ
   // when max_levels stopped the coarsening early.
   static constexpr int kDenseCoarseLimit = 1500;

@@ -40,7 +40,8 @@ class MgpbdSolver final : public LinearSolver {
     amg::resolve_options(opt_, {ctx.block_size, ctx.near_kernel});
     const bool built = !h_.empty() && A.rows() == h_.matrix(0).rows() && A.nonZeros() == nnz0_ &&
                        ctx.block_size == block_size_;
-    const bool full = policy_.rebuild(kind, ctx, built);
+    // A hierarchy built on couplings that were zero and are not any more is rebuilt too.
+    const bool full = policy_.rebuild(kind, ctx, built) || !h_.refreshable(A);
     try {
       if (full) {
         h_.setup(A, opt_, {ctx.block_size, ctx.near_kernel});

@@ -102,8 +102,43 @@ Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout
   return out;
 }
 
-Aggregates aggregate_nodes(const SparseMatrix& N, const NodeLayout& nodes, double theta, AggregationRule rule) {
-  return expand_aggregates(rule(strength_symmetric(N, theta)), nodes);
+namespace {
+// The graph of the aggregates: a and b adjacent where S couples a node of a to a node of b.
+SparseMatrix aggregate_graph(const SparseMatrix& S, const Aggregates& agg) {
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(static_cast<size_t>(S.nonZeros()));
+  const int *so = S.outerIndexPtr(), *sc = S.innerIndexPtr();
+  for (int i = 0; i < static_cast<int>(S.rows()); ++i) {
+    const int a = agg.aggregate[i];
+    if (a < 0) continue;
+    for (int k = so[i]; k < so[i + 1]; ++k)
+      if (agg.aggregate[sc[k]] >= 0) t.emplace_back(a, agg.aggregate[sc[k]], 1.0);
+  }
+  SparseMatrix C(agg.num_aggregates, agg.num_aggregates);
+  C.setFromTriplets(t.begin(), t.end());  // duplicates summed: the pattern is what counts
+  return C;
+}
+}  // namespace
+
+Aggregates merge_small_aggregates(const SparseMatrix& S, Aggregates agg, AggregationRule rule, double min_nodes) {
+  const double n = static_cast<double>(S.rows());
+  while (min_nodes > 0 && agg.num_aggregates > 1 && n < min_nodes * agg.num_aggregates) {
+    const Aggregates merged = rule(aggregate_graph(S, agg));
+    if (merged.num_aggregates == 0 || merged.num_aggregates >= agg.num_aggregates) break;  // no progress
+    for (int& a : agg.aggregate)
+      if (a >= 0) a = merged.aggregate[a];  // an aggregate with no coupled neighbour stays isolated (−1)
+    std::vector<int> roots(merged.num_aggregates);
+    for (int c = 0; c < merged.num_aggregates; ++c) roots[c] = agg.roots[merged.roots[c]];
+    agg.roots = std::move(roots);
+    agg.num_aggregates = merged.num_aggregates;
+  }
+  return agg;
+}
+
+Aggregates aggregate_nodes(const SparseMatrix& N, const NodeLayout& nodes, double theta, AggregationRule rule,
+                           double min_nodes) {
+  const SparseMatrix S = strength_symmetric(N, theta);
+  return expand_aggregates(merge_small_aggregates(S, rule(S), rule, min_nodes), nodes);
 }
 
 Aggregates nodal_aggregation(const SparseMatrix& A, const NodeLayout& nodes, double theta, AggregationRule rule) {

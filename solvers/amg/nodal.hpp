@@ -35,8 +35,14 @@ SparseMatrix node_matrix(const SparseMatrix& A, const BlockPattern& blocks);
 // the first row of the root node).
 Aggregates expand_aggregates(const Aggregates& node_aggregates, const NodeLayout& nodes);
 
-// Strength (the symmetric rule on the node matrix N), then `rule` on the node graph, then expansion.
-Aggregates aggregate_nodes(const SparseMatrix& N, const NodeLayout& nodes, double theta, AggregationRule rule);
+// While the aggregates hold fewer than min_nodes rows of S each on average (S's couplings run
+// along lines, say), `rule` aggregates the aggregates on the graph of their couplings in S; stops
+// when a round makes no progress. min_nodes 0: agg unchanged.
+Aggregates merge_small_aggregates(const SparseMatrix& S, Aggregates agg, AggregationRule rule, double min_nodes);
+// Strength (the symmetric rule on the node matrix N), then `rule` on the node graph, then
+// merge_small_aggregates with min_nodes, then expansion.
+Aggregates aggregate_nodes(const SparseMatrix& N, const NodeLayout& nodes, double theta, AggregationRule rule,
+                           double min_nodes = 0);
 // The same on A's node_matrix.
 Aggregates nodal_aggregation(const SparseMatrix& A, const NodeLayout& nodes, double theta, AggregationRule rule);
 

@@ -133,10 +133,10 @@ TEST(AmgPrimal, LazyRefreshAndBadInput) {
   EXPECT_THROW(make_linear_solver("mgpbd", p), Error);
 }
 
-// amg.min_coarsening: on the stretched bar at resolution 8 the level-1 aggregation at θ = 0.1
-// keeps under 4 nodes per aggregate; the floor redoes it at θ = 0, so the hierarchy is the one of
-// coarse_nodal_strength_threshold = 0, with a lower operator complexity than with the floor off
-// and the same convergence.
+// amg.min_coarsening: on the stretched bar at resolution 8, with every block of K kept
+// (drop_tolerance 0), the level-1 aggregation at θ = 0.1 keeps under 4 nodes per aggregate; the
+// floor redoes it at θ = 0, so the hierarchy is the one of coarse_nodal_strength_threshold = 0,
+// with a lower operator complexity than with the floor off and the same convergence.
 TEST(AmgPrimal, MinCoarseningRedoesSlowCoarseAggregation) {
   const PrimalCase c = primal_case("bar_hang", {{"resolution", "8"}, {"prestretch", "1.05"}}, 0, 0);
   auto hierarchy = [&](double min_coarsening, double coarse_theta) {
@@ -144,6 +144,7 @@ TEST(AmgPrimal, MinCoarseningRedoesSlowCoarseAggregation) {
     o.near_kernel.kind = "auto";
     o.min_coarsening = min_coarsening;
     o.coarse_nodal_strength_threshold = coarse_theta;
+    o.drop_tolerance = 0;
     auto h = std::make_unique<amg::Hierarchy>();
     h->setup(c.K, o, {3, &c.rigid});
     return h;
@@ -157,6 +158,7 @@ TEST(AmgPrimal, MinCoarseningRedoesSlowCoarseAggregation) {
   EXPECT_LT(floor->operator_complexity(), off->operator_complexity());
   Vector x;
   Params p = solver_params(1e-8);
+  p.amg.drop_tolerance = 0;
   p.amg.min_coarsening = 0;
   const LinearStats st_off = solve_k(c, p, "mgpbd", x, c.dual_measure());
   p.amg.min_coarsening = 4;
