@@ -86,14 +86,13 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   levels_.emplace_back();
   levels_[0].A = &A;
   fine_nnz_ = A.nonZeros();
-  filtered_ = false;
+  filter_ = ZeroBlockFilter{};
   if (info.block_size > 1) {
     Level& L0 = levels_[0];
     L0.nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info.block_size);
     if (opt_.drop_tolerance > 0) {
       build_level_blocks(L0);
-      filtered_ = L0.A_blocks && filter_.build(A, L0.A_blocks->pattern, opt_.drop_tolerance);
-      if (filtered_) {
+      if (L0.A_blocks && filter_.build(A, L0.A_blocks->pattern, opt_.drop_tolerance)) {
         L0.A = &filter_.matrix();
         L0.A_blocks.reset();  // coarsen() builds A_F's
       }
@@ -204,12 +203,12 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   return true;
 }
 
-void Hierarchy::refresh(const SparseMatrix& A) {
+bool Hierarchy::refresh(const SparseMatrix& A) {
   if (levels_.empty()) throw Error("mgpbd: refresh before setup");
   if (A.rows() != levels_[0].A->rows() || A.nonZeros() != fine_nnz_)
     throw Error("mgpbd: refresh with a different sparsity pattern (a full setup is needed)");
-  if (filtered_) filter_.refresh(A);
-  levels_[0].A = filtered_ ? &filter_.matrix() : &A;
+  if (filtered() && !filter_.refresh(A)) return false;
+  levels_[0].A = filtered() ? &filter_.matrix() : &A;
   for (size_t l = 0; l + 1 < levels_.size(); ++l) {
     Level& L = levels_[l];
     Level& next = levels_[l + 1];
@@ -221,6 +220,7 @@ void Hierarchy::refresh(const SparseMatrix& A) {
   }
   if (levels_.back().smoother) levels_.back().smoother->refresh(*levels_.back().A);
   finish_levels();
+  return true;
 }
 
 void Hierarchy::factor_coarsest() {

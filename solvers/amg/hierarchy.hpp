@@ -136,10 +136,9 @@ class Hierarchy {
   // opt may hold "auto" kinds: they are resolved against info (options() returns the result).
   void setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info = {});
   // A: same pattern as at setup(), new values. Throws xb::Error if the pattern size changed.
-  void refresh(const SparseMatrix& A);
-  // Whether refresh(A) keeps a hierarchy fit for A: false when level 0 dropped blocks
-  // (amg.drop_tolerance) that A's values no longer make negligible (a full setup is due).
-  bool refreshable(const SparseMatrix& A) const { return !filtered_ || filter_.holds(A); }
+  // Returns false, with only level 0 refreshed, when level 0 dropped blocks (amg.drop_tolerance)
+  // that A's values no longer make negligible: the hierarchy is stale and a full setup is due.
+  bool refresh(const SparseMatrix& A);
   // One V-cycle from x = 0 (Algorithm 2): x ≈ A⁻¹ b. The operator b ↦ x is symmetric positive
   // definite for every smoother, so it can precondition CG. Defined in vcycle.cpp.
   void vcycle(const Vector& b, Vector& x);
@@ -180,7 +179,7 @@ class Hierarchy {
   MatrixInfo info_;
   std::vector<Level> levels_;
   ZeroBlockFilter filter_;  // level 0's A_F, when blocks were dropped
-  bool filtered_ = false;
+  bool filtered() const { return filter_.dropped_blocks() > 0; }
   long fine_nnz_ = 0;       // the caller's A
   // Coarsest level: dense Cholesky while small (the usual case, ≤ max_coarse rows), sparse LDLᵀ
   // when max_levels stopped the coarsening early.

@@ -40,18 +40,17 @@ class MgpbdSolver final : public LinearSolver {
     amg::resolve_options(opt_, {ctx.block_size, ctx.near_kernel});
     const bool built = !h_.empty() && A.rows() == h_.matrix(0).rows() && A.nonZeros() == nnz0_ &&
                        ctx.block_size == block_size_;
-    // A hierarchy built on couplings that were zero and are not any more is rebuilt too.
-    const bool full = policy_.rebuild(kind, ctx, built) || !h_.refreshable(A);
+    const bool full = policy_.rebuild(kind, ctx, built);
     try {
-      if (full) {
+      // A hierarchy built on couplings that were zero and are not any more is rebuilt too.
+      if (!full && h_.refresh(A)) {
+        action_ = "refresh";
+      } else {
         h_.setup(A, opt_, {ctx.block_size, ctx.near_kernel});
         nnz0_ = A.nonZeros();
         block_size_ = ctx.block_size;
         policy_.rebuilt(ctx);
         action_ = "setup";
-      } else {
-        h_.refresh(A);
-        action_ = "refresh";
       }
     } catch (const Error& e) {
       // Reported as a breakdown by solve(): a failed run is a result, not a crash.

@@ -2,7 +2,6 @@
 
 #include "../../core/error.hpp"
 
-#include <cmath>
 #include <string>
 
 namespace xb::amg {
@@ -25,20 +24,6 @@ std::vector<double> ZeroBlockFilter::diagonal_norms(const SparseMatrix& A) const
   return d;
 }
 
-bool ZeroBlockFilter::holds(const SparseMatrix& A) const {
-  if (A.nonZeros() != source_nnz_) return false;
-  const std::vector<double> dnorm = diagonal_norms(A);
-  const int nn = p_.row_nodes();
-  int alive = 0;
-#pragma omp parallel for schedule(static) reduction(+ : alive)
-  for (int I = 0; I < nn; ++I)
-    for (int d = drop_ptr_[I]; d < drop_ptr_[I + 1]; ++d) {
-      const int k = drop_block_[d], J = p_.col[k];
-      if (block_norm(A, I, k) >= tol_ * std::sqrt(dnorm[I] * dnorm[J])) ++alive;
-    }
-  return alive == 0;
-}
-
 bool ZeroBlockFilter::build(const SparseMatrix& A, const BlockPattern& p, double tol) {
   if (p.row_start != p.col_start) throw Error("amg.drop_tolerance: the level's row and column nodes differ");
   p_ = p;
@@ -59,12 +44,12 @@ bool ZeroBlockFilter::build(const SparseMatrix& A, const BlockPattern& p, double
 #pragma omp parallel for schedule(static)
   for (int I = 0; I < nn; ++I)
     for (int k = p_.ptr[I]; k < p_.ptr[I + 1]; ++k) {
-      const int J = p_.col[k];
-      if (J != I && block_norm(A, I, k) < tol * std::sqrt(dnorm[I] * dnorm[J])) {
+      double norm;
+      if (p_.col[k] != I && negligible(A, I, k, dnorm, norm)) {
         keep[k] = 0;
         ++dropped[I + 1];
       } else {
-        width[I] += p_.cols(J);
+        width[I] += p_.cols(p_.col[k]);
       }
     }
   for (int I = 0; I < nn; ++I) dropped[I + 1] += dropped[I];
@@ -106,20 +91,26 @@ bool ZeroBlockFilter::build(const SparseMatrix& A, const BlockPattern& p, double
   return true;
 }
 
-void ZeroBlockFilter::refresh(const SparseMatrix& A) {
+bool ZeroBlockFilter::refresh(const SparseMatrix& A) {
   if (A.nonZeros() != source_nnz_) throw Error("amg.drop_tolerance: refresh with a different sparsity pattern");
+  const std::vector<double> dnorm = diagonal_norms(A);
   const double* av = A.valuePtr();
   double* fv = F_.valuePtr();
   const int nn = p_.row_nodes();
-#pragma omp parallel for schedule(static)
+  int alive = 0;
+#pragma omp parallel for schedule(static) reduction(+ : alive)
   for (int I = 0; I < nn; ++I) {
-    double lump = 0;
-    for (int d = drop_ptr_[I]; d < drop_ptr_[I + 1]; ++d) lump += block_norm(A, I, drop_block_[d]);
+    double lump = 0, norm;
+    for (int d = drop_ptr_[I]; d < drop_ptr_[I + 1]; ++d) {
+      if (!negligible(A, I, drop_block_[d], dnorm, norm)) ++alive;
+      lump += norm;
+    }
     for (int r = p_.row_start[I]; r < p_.row_start[I + 1]; ++r) {
       for (int e = F_.outerIndexPtr()[r]; e < F_.outerIndexPtr()[r + 1]; ++e) fv[e] = av[source_[e]];
       fv[diag_[r]] += lump;
     }
   }
+  return alive == 0;
 }
 
 }  // namespace xb::amg

@@ -15,6 +15,7 @@
 
 #include "block_sparse.hpp"
 
+#include <cmath>
 #include <vector>
 
 namespace xb::amg {
@@ -25,10 +26,9 @@ class ZeroBlockFilter {
   // kept, when no block is below tol: the caller then uses A itself.
   bool build(const SparseMatrix& A, const BlockPattern& p, double tol);
   // A with the pattern it had in build(), new values: the same blocks dropped, lumps recomputed.
-  void refresh(const SparseMatrix& A);
-  // Whether every dropped block of A (same pattern) is still below tol: false once the state has
-  // moved on and a dropped coupling is real (a hierarchy built on A_F is then stale).
-  bool holds(const SparseMatrix& A) const;
+  // Returns whether every dropped block is still below tol: false once the state has moved on and
+  // a dropped coupling is real (a hierarchy built on A_F is then stale; A_F is still above A).
+  bool refresh(const SparseMatrix& A);
   const SparseMatrix& matrix() const { return F_; }
   long source_nonzeros() const { return source_nnz_; }
   int dropped_blocks() const { return static_cast<int>(drop_block_.size()); }
@@ -36,6 +36,11 @@ class ZeroBlockFilter {
  private:
   double block_norm(const SparseMatrix& A, int I, int k) const;
   std::vector<double> diagonal_norms(const SparseMatrix& A) const;
+  // Block k of row node I against tol (its norm is returned in `norm`).
+  bool negligible(const SparseMatrix& A, int I, int k, const std::vector<double>& dnorm, double& norm) const {
+    norm = block_norm(A, I, k);
+    return norm < tol_ * std::sqrt(dnorm[I] * dnorm[p_.col[k]]);
+  }
   BlockPattern p_;                 // A's blocks
   double tol_ = 0;
   std::vector<int> diag_block_;    // per node: its diagonal block's index in p_

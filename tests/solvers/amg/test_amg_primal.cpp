@@ -15,16 +15,7 @@
 using namespace xb;
 using xb::test::primal_case;
 using xb::test::PrimalCase;
-
-namespace {
-Params solver_params(double tol) {
-  Params p;
-  p.linear.tol = tol;
-  p.linear.max_iterations = 20000;
-  return p;
-}
-
-}  // namespace
+using xb::test::solver_params;
 
 // mgpbd (defaults: nodal SA, 6 rigid modes, Chebyshev) on a small K reaches 1e-8 (recomputed from
 // K and x) and, solved further, equals Eigen's sparse LDLᵀ solution; the Δλ it implies solves the

@@ -43,6 +43,14 @@ PrimalCase primal_case(const std::string& scene, const std::vector<std::pair<std
 // K's pattern filled by new values: the same construction at a slightly moved state.
 SparseMatrix primal_matrix(const Problem& prob, const Eigen::Matrix3Xd& x, double h, SparseMatrix* J_out = nullptr);
 
+// Solver settings for the primal tests: tolerance `tol`, an iteration cap no test reaches.
+inline Params solver_params(double tol) {
+  Params p;
+  p.linear.tol = tol;
+  p.linear.max_iterations = 20000;
+  return p;
+}
+
 // `method` on the case's K with its block size and rigid modes, optionally judged by `rel` (which
 // the in-house solvers must accept).
 inline LinearStats solve_k(const PrimalCase& c, const Params& p, const std::string& method, Vector& x,
