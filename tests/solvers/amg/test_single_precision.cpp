@@ -1,6 +1,7 @@
 // amg.precision = single: the V-cycle on float copies of the levels is the double one to float
 // round-off (not bit-equal: the option is not ignored), follows a values-only refresh, and
-// preconditions double CG to 1e-8 in both forms; the Gauss–Seidel kinds are refused.
+// preconditions double CG to 1e-8 in both forms; the Gauss–Seidel kinds are refused. The float
+// V-cycle works whatever the scale of b and leaves the caller's floating-point mode as it was.
 #include "core/error.hpp"
 #include "harness/params.hpp"
 #include "solvers/amg/hierarchy.hpp"
@@ -10,6 +11,10 @@
 #include "test_amg_primal.hpp"
 
 #include <gtest/gtest.h>
+
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 using namespace xb;
 using namespace xb::amg;
@@ -104,6 +109,50 @@ TEST(AmgSinglePrecision, PcgStillConvergesTo1em8InBothForms) {
   residual(c.A(), c.recover(dx), c.b, r);
   EXPECT_LE(norm2(r) / norm2(c.b), 1.01e-8);
 }
+
+// b far outside float's range (1e-40 is below its smallest normal number, 1e40 above its
+// largest): the float V-cycle of c·b is c times that of b.
+TEST(AmgSinglePrecision, TheScaleOfBDoesNotMatter) {
+  const auto s = xb::test::scene_system("cloth_hang", 24, 1);
+  AmgOptions o;
+  o.max_coarse = 50;
+  o.precision = "single";
+  Hierarchy h;
+  h.setup(s.ds->A(), o);
+  Vector x1;
+  h.vcycle(s.b, x1);
+  for (const double c : {1e-40, 1e40}) {
+    Vector xc;
+    h.vcycle(c * s.b, xc);
+    ASSERT_TRUE(xc.allFinite()) << c;
+    EXPECT_LT(rel(xc / c, x1), 1e-6) << c;
+  }
+  Vector x0;
+  h.vcycle(Vector::Zero(s.b.size()), x0);
+  EXPECT_EQ(x0.norm(), 0.0);
+}
+
+#if defined(__SSE__)
+// The float V-cycle flushes denormals on its threads (K's tiny entries made it 11× slower) and
+// gives the caller's flush-to-zero / denormals-are-zero bits back, set or not.
+TEST(AmgSinglePrecision, TheCallersFloatingPointModeIsRestored) {
+  const auto c = xb::test::primal_case("bar_hang", {{"resolution", "3"}, {"aspect", "3"}}, 1, 0);
+  AmgOptions o;
+  o.max_coarse = 30;
+  o.precision = "single";
+  Hierarchy h;
+  h.setup(c.K, o, {3, &c.rigid});
+  const unsigned saved = _mm_getcsr(), ftz_daz = 0x8040;
+  for (const unsigned bits : {0u, ftz_daz}) {
+    _mm_setcsr((saved & ~ftz_daz) | bits);
+    Vector x;
+    h.vcycle(c.f, x);
+    EXPECT_EQ(_mm_getcsr() & ftz_daz, bits);
+    EXPECT_TRUE(x.allFinite());
+  }
+  _mm_setcsr(saved);
+}
+#endif
 
 TEST(AmgSinglePrecision, GaussSeidelKindsAndUnknownNamesAreRefused) {
   AmgOptions o;
