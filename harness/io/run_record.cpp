@@ -120,6 +120,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   const MethodInfo* m = find_method(method);
   if (m && !m->local) {
     r.datasets["step_length"] = L.step_length;
+    r.datasets["fill_time"] = L.fill_time;
     r.datasets["linear_iterations"] = L.linear_iterations;
     r.datasets["linear_setup_time"] = L.linear_setup_time;
     r.datasets["linear_solve_time"] = L.linear_solve_time;

@@ -41,7 +41,7 @@ const ResultsSchema& results_schema() {
       expand({
           {"any", "float", {"level_rows", "level_nnz"}},
           {"simulation", "int", {"frame", "substep", "iteration", "linear_iterations", "linear_history/offset", "reference/iterations"}},
-          {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "energy", "wall_time", "step_time", "step_length", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets"}},
+          {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "energy", "wall_time", "step_time", "step_length", "fill_time", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets"}},
           {"simulation", "string", {"linear_setup_action", "reference/status"}},
           {"linear", "float", {"residual", "time", "solution"}},
       }),

@@ -28,6 +28,7 @@ void PrimalSolve::setup(const Gradients& grad, const Eigen::VectorXd& alpha_tild
   grad_ = &grad;
   alpha_tilde_ = &alpha_tilde;
   sys_.fill(grad, alpha_tilde);
+  fill_time_ = t.seconds();
   const Eigen::MatrixXd B = sys_.rigid_modes(x);
   ctx.block_size = 3;
   ctx.near_kernel = &B;

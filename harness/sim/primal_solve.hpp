@@ -24,6 +24,8 @@ class PrimalSolve {
   LinearStats solve(const Vector& b, Vector& dlambda);
 
   LinearSolver& solver() { return *solver_; }
+  // Seconds the last setup() spent filling K (part of its setup_time).
+  double fill_time() const { return fill_time_; }
   const PrimalSystem& system() const { return sys_; }
 
  private:
@@ -35,7 +37,7 @@ class PrimalSolve {
   bool solver_judges_dual_ = false;  // its Krylov loop stops on the dual residual itself
   const Gradients* grad_ = nullptr;
   const Eigen::VectorXd* alpha_tilde_ = nullptr;
-  double bnorm_ = 0, setup_time_ = 0;
+  double bnorm_ = 0, setup_time_ = 0, fill_time_ = 0;
   Vector work_;
 };
 

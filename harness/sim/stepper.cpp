@@ -68,6 +68,7 @@ class Simulation {
   struct LastStep {
     LinearStats linear;
     double time = 0;
+    double fill = 0;    // s filling A or K (global methods)
     double length = 0;  // step length (global methods)
     std::string action;
   };
@@ -265,6 +266,7 @@ Simulation::Residuals Simulation::log_state(int frame, int sub, int it, const La
   const LastStep none;
   const LastStep& s = it == 0 ? none : last;
   L.step_time.push_back(s.time);
+  L.fill_time.push_back(s.fill);
   L.step_length.push_back(s.length);
   L.linear_iterations.push_back(s.linear.iterations);
   L.linear_setup_time.push_back(s.linear.setup_time);
@@ -289,7 +291,9 @@ bool Simulation::step(int frame, int sub, int it, LastStep& last) {
     last.action = "";
     return true;
   }
+  Timer fill_clock;
   if (!primal_ || opt_.on_system) ds_.fill(state_, alpha_tilde_);
+  last.fill = primal_ ? 0 : fill_clock.seconds();
   if (opt_.on_system && opt_.on_system(SystemView{frame, sub, it, ds_.A(), b_, state_, alpha_tilde_, P.x})) {
     stop_ = true;
     res_.message = "stopped by capture";
@@ -299,6 +303,7 @@ bool Simulation::step(int frame, int sub, int it, LastStep& last) {
   first_setup_ = false;
   if (primal_) {
     primal_->setup(state_.grad, alpha_tilde_, P.x, kind, SetupContext{frame, sub, it});
+    last.fill = primal_->fill_time();
     last.linear = primal_->solve(b_, dlambda_);
   } else {
     solver_->setup(ds_.A(), kind, SetupContext{frame, sub, it});

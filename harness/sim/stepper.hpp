@@ -36,6 +36,9 @@ struct IterationLog {
   std::vector<double> energy;                  // ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) (α > 0)
   std::vector<double> wall_time;               // s since the substep began
   std::vector<double> step_time;               // s in the method step (assembly + setup + solve, or sweep)
+  // Global methods: s filling the form's matrix (A = J M⁻¹Jᵀ + α̃ before the setup; K inside
+  // linear_setup_time), so that a step splits into fill, setup or refresh, and solve.
+  std::vector<double> fill_time;
   // Global methods: the step length of the step that led here (ω for step = fixed, the line
   // search's t for step = line_search); 0 at iteration 0 and for local methods.
   std::vector<double> step_length;

@@ -69,9 +69,10 @@ TEST(PrimalCli, RunRecordsTheFormAndBothFormsTakeTheSameSteps) {
   ASSERT_EQ(cmd_run({"--scene", "cloth_hang", "--set", "resolution=8", "--solver", "xpbd-gs,cholmod", "--form", "dual,primal",
                      "--out", out}),
             0);
-  const auto runs = read_runs(out, false);
+  const auto runs = read_runs(out, true);
   ASSERT_EQ(runs.size(), 3u);  // the local sweep runs once
   EXPECT_EQ(attr_string(runs_with(runs, "xpbd-gs")[0], "form_used"), "none");
+  EXPECT_FALSE(runs_with(runs, "xpbd-gs")[0].datasets.count("fill_time"));
   const auto chol = runs_with(runs, "cholmod");
   ASSERT_EQ(chol.size(), 2u);
   EXPECT_EQ(attr_string(chol[0], "form_used"), "dual");
@@ -79,6 +80,25 @@ TEST(PrimalCli, RunRecordsTheFormAndBothFormsTakeTheSameSteps) {
   // The same Δλ either way, so the same outer iterations to the same tolerance.
   for (const auto& r : chol) EXPECT_EQ(attr_string(r, "status"), "ok") << r.name;
   EXPECT_EQ(attr_double(chol[0], "outer_iterations"), attr_double(chol[1], "outer_iterations"));
+  // Each step's fill of A (dual, before the setup) or K (primal, inside the setup) is timed.
+  for (const auto& r : chol) {
+    const auto& fill = std::get<std::vector<double>>(r.datasets.at("fill_time"));
+    const auto& step = std::get<std::vector<double>>(r.datasets.at("step_time"));
+    const auto& setup = std::get<std::vector<double>>(r.datasets.at("linear_setup_time"));
+    const auto& it = std::get<std::vector<long long>>(r.datasets.at("iteration"));
+    ASSERT_EQ(fill.size(), step.size()) << r.name;
+    for (size_t i = 0; i < fill.size(); ++i) {
+      if (it[i] == 0) {
+        EXPECT_EQ(fill[i], 0.0) << r.name;
+        continue;
+      }
+      EXPECT_GT(fill[i], 0.0) << r.name << " entry " << i;
+      EXPECT_LE(fill[i], step[i]) << r.name << " entry " << i;
+      if (r.name == chol[1].name) {
+        EXPECT_LE(fill[i], setup[i]) << "entry " << i;
+      }
+    }
+  }
 }
 
 TEST(PrimalCli, PrimalIsRefusedAtZeroComplianceAndAutoTakesDual) {
