@@ -102,8 +102,8 @@ void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const 
     return;
   }
   by_blocks_ = false;
-  AP_ = spgemm(A, P);
-  Ac = spgemm(R, AP_);
+  take(AP_, spgemm(A, P));
+  take(Ac, spgemm(R, AP_));
 }
 
 void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
@@ -112,8 +112,8 @@ void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const 
   r_ = std::move(pr);
   a_ = std::move(pa);
   p_ = std::move(pp);
-  AP_ = block_product(A, a_, P, p_, ap_);
-  Ac = block_product(R, r_, AP_, ap_, ac_);
+  take(AP_, block_product(A, a_, P, p_, ap_));
+  take(Ac, block_product(R, r_, AP_, ap_, ac_));
 }
 
 void GalerkinProduct::refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac) {

@@ -83,6 +83,9 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   opt_ = resolve_options(opt, info);
   info_ = info;
   levels_.clear();
+  // Levels are never moved (a move would copy their matrices: core/sparse.hpp's take), and the
+  // references coarsen() holds stay valid.
+  levels_.reserve(opt_.max_levels);
   levels_.emplace_back();
   levels_[0].A = &A;
   fine_nnz_ = A.nonZeros();
@@ -102,8 +105,6 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   while (coarsen(B)) {
   }
   info_.near_kernel = nullptr;  // valid during setup only
-  // std::vector may have moved the levels: re-point the coarse matrices at their own storage.
-  for (size_t l = 1; l < levels_.size(); ++l) levels_[l].A = &levels_[l].A_own;
   if (opt_.coarse_solver == "smoother") {
     build_level_blocks(levels_.back());
     make_level_smoother(levels_.back());
@@ -177,12 +178,13 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,
                                                opt_.smoother.power_iterations, opt_.smoother.seed,
                                                NodeLayout{T.col_start}, reuse);
-    T.P = std::move(S.P);
-    T.R = std::move(S.R);
+    take(T.P, std::move(S.P));
+    take(T.R, std::move(S.R));
     T.max_row_entries = 0;
     for (int i = 0; i < n; ++i) T.max_row_entries = std::max(T.max_row_entries, static_cast<int>(T.P.row(i).nonZeros()));
   }
-  Level next;
+  Level& next = levels_.emplace_back();  // no reallocation: setup() reserved max_levels
+  next.A = &next.A_own;
   if (!L.nodes.scalar()) {
     next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns
     L.P_blocks.build(T.P, L.nodes, next.nodes);
@@ -197,9 +199,11 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
   B = T.B_coarse;
   L.aggregates = std::move(agg);
-  L.T = std::move(T);
-  levels_.push_back(std::move(next));
-  levels_.back().A = &levels_.back().A_own;
+  take(L.T.P, std::move(T.P));
+  take(L.T.R, std::move(T.R));
+  L.T.B_coarse = std::move(T.B_coarse);
+  L.T.col_start = std::move(T.col_start);
+  L.T.max_row_entries = T.max_row_entries;
   return true;
 }
 

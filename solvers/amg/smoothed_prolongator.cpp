@@ -244,9 +244,9 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
     set_omega();
     if (by_blocks) {
       jacobi_step_by_node_blocks(D, out.omega, T, pt, AT, pat);
-      out.P = std::move(AT);
+      take(out.P, std::move(AT));
     } else {
-      out.P = add_scaled(T, -out.omega, block_scale_rows(D, AT));
+      take(out.P, add_scaled(T, -out.omega, block_scale_rows(D, AT)));
     }
   } else {
     const Vector inv_diag = inverse_diagonal(A);
@@ -257,11 +257,11 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
     for (int i = 0; i < n; ++i)
       for (int k = AT.outerIndexPtr()[i]; k < AT.outerIndexPtr()[i + 1]; ++k) AT.valuePtr()[k] *= inv_diag[i];
     if (by_blocks && add_scaled_in_place(T, -out.omega, AT))
-      out.P = std::move(AT);
+      take(out.P, std::move(AT));
     else
-      out.P = add_scaled(T, -out.omega, AT);
+      take(out.P, add_scaled(T, -out.omega, AT));
   }
-  out.R = transpose(out.P);  // as fast as a block transpose (measured): a counting sort
+  take(out.R, transpose(out.P));  // as fast as a block transpose (measured): a counting sort
   return out;
 }
 
