@@ -78,7 +78,7 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
 
 void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info) {
   if (A.rows() != A.cols()) throw Error("mgpbd: the matrix is not square");
-  if (opt.max_levels < 1) throw Error("amg.max_levels must be >= 1");
+  if (opt.max_levels < 1 || opt.max_levels > 64) throw Error("amg.max_levels must be between 1 and 64");
   if (opt.max_coarse < 1) throw Error("amg.max_coarse must be >= 1");
   opt_ = resolve_options(opt, info);
   info_ = info;
