@@ -291,9 +291,11 @@ bool Simulation::step(int frame, int sub, int it, LastStep& last) {
     last.action = "";
     return true;
   }
-  Timer fill_clock;
-  if (!primal_ || opt_.on_system) ds_.fill(state_, alpha_tilde_);
-  last.fill = primal_ ? 0 : fill_clock.seconds();
+  if (!primal_ || opt_.on_system) {  // the primal form fills K instead (capture needs A too)
+    Timer fill_clock;
+    ds_.fill(state_, alpha_tilde_);
+    last.fill = fill_clock.seconds();
+  }
   if (opt_.on_system && opt_.on_system(SystemView{frame, sub, it, ds_.A(), b_, state_, alpha_tilde_, P.x})) {
     stop_ = true;
     res_.message = "stopped by capture";

@@ -199,11 +199,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
   B = T.B_coarse;
   L.aggregates = std::move(agg);
-  take(L.T.P, std::move(T.P));
-  take(L.T.R, std::move(T.R));
-  L.T.B_coarse = std::move(T.B_coarse);
-  L.T.col_start = std::move(T.col_start);
-  L.T.max_row_entries = T.max_row_entries;
+  take(L.T, std::move(T));
   return true;
 }
 

@@ -20,6 +20,16 @@ struct Tentative {
   int max_row_entries = 0;     // 1 ⇒ the one-candidate Galerkin path applies
 };
 
+// dst takes src's arrays (core/sparse.hpp's take: a plain move would copy P and R).
+using xb::take;
+inline void take(Tentative& dst, Tentative&& src) {
+  take(dst.P, std::move(src.P));
+  take(dst.R, std::move(src.R));
+  dst.B_coarse = std::move(src.B_coarse);
+  dst.col_start = std::move(src.col_start);
+  dst.max_row_entries = src.max_row_entries;
+}
+
 // B: n × k candidates. A column is dropped on an aggregate when what is left of it after
 // orthogonalisation is below drop_tol times its norm there.
 Tentative tentative_prolongator(const Aggregates& agg, const Eigen::MatrixXd& B, double drop_tol = 1e-10);

@@ -93,10 +93,6 @@ void prolongate_add(const Level& L, const CsrOf<S>& P, const VectorOf<S>& xc, Ve
 // pattern is copied array by array (Eigen's cast<float>() inserts entry by entry: on cloth 256²
 // the float copies made at setup cost ~0.1 s with it).
 void copy_single(const SparseMatrix& src, CsrOf<float>& dst) {
-  if (!src.isCompressed()) {
-    dst = src.cast<float>();
-    return;
-  }
   const long nnz = src.nonZeros();
   if (dst.rows() != src.rows() || dst.cols() != src.cols() || dst.nonZeros() != nnz) {
     dst.resize(src.rows(), src.cols());
