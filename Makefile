@@ -13,7 +13,7 @@ JOBS   ?= $(shell nproc)
 export OMP_WAIT_POLICY ?= passive
 export GOMP_SPINCOUNT ?= 10000
 
-.PHONY: setup build demo test test-asan fuzz clean figures perf perf-baseline
+.PHONY: setup build demo test test-asan fuzz clean figures race perf perf-baseline
 
 setup:
 	@bash scripts/setup.sh
@@ -36,6 +36,13 @@ demo: build
 FIGURES_SIZE ?= default
 figures: build
 	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
+
+# The simulation-level race (figures/race.toml): every method at its best, per frame, across sizes,
+# one process per run, into plots/race/ (race_<scene>.png, race_crossover.png, summary.md).
+# Resumes (finished runs are kept); RACE_ARGS="--fresh", "--only squash --sizes 0,1", "--methods mgpbd,cholmod".
+RACE_ARGS ?=
+race: build
+	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench $(RACE_ARGS)
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

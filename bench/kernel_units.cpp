@@ -285,7 +285,7 @@ void smoother_table(const CapturedSystem& cs, const Params& p, const std::string
           residual(cs.A, x, cs.b, r);
           rel = norm2(r) / norm2(cs.b);
         } else {
-          PrimalSolve ps(make_linear_solver("mgpbd", q), cs.graph, q.linear.tol);
+          PrimalSolve ps(make_linear_solver("mgpbd", q), cs.graph, q.linear);
           double t0 = now_s();
           ps.setup(cs.grad, cs.alpha_tilde, cs.x, SetupKind::Structure, SetupContext{});
           setup = now_s() - t0;

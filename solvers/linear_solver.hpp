@@ -71,10 +71,15 @@ class LinearSolver {
   // A must stay alive and unchanged until the next setup() call (solvers may keep a pointer).
   virtual void setup(const SparseMatrix& A, SetupKind kind, const SetupContext& ctx) = 0;
 
-  // Solve A x = b from a zero initial guess to ‖r‖₂ ≤ tol·‖b‖₂ (tol = linear.tol).
+  // Solve A x = b from a zero initial guess to ‖r‖₂ ≤ tol·‖b‖₂ (tol = tolerance()).
   // x is resized by the solver. Returns the statistics of this solve; setup_time is that of
   // the setup() call that preceded it (0 if none did).
   virtual LinearStats solve(const Vector& b, Vector& x) = 0;
+
+  // The relative tolerance of the following solves: linear.tol from the settings, until the
+  // caller's forcing rule (linear.forcing, harness/sim/forcing.hpp) sets one per outer iteration.
+  void set_tolerance(double tol) { tol_ = tol; }
+  double tolerance() const { return tol_; }
 
   // Judge convergence (and the residual history) by `rel` instead of ‖r‖₂/‖b‖₂ from now on. Only
   // solvers whose Krylov loop is in-house can: they return true. The others return false and the
@@ -93,6 +98,12 @@ class LinearSolver {
 
   // What the last setup() actually did ("structure", "values", "reuse", ...), for the log.
   virtual std::string last_setup_action() const { return ""; }
+
+ protected:
+  explicit LinearSolver(double tol) : tol_(tol) {}
+
+ private:
+  double tol_;
 };
 
 // The registry of methods. A method is either a linear solver (global) or a local XPBD sweep.

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "amg/amg_settings.hpp"
+#include "direct/cholmod_settings.hpp"
 #include "local/xpbd_settings.hpp"
 #include "mpi/hypre_settings.hpp"
 #include "mpi/muelu_settings.hpp"
@@ -11,14 +12,23 @@
 namespace xb {
 
 struct LinearSettings {
-  double tol = 1e-8;  // ‖r‖₂ ≤ tol·‖b‖₂
+  double tol = 1e-8;  // ‖r‖₂ ≤ tol·‖b‖₂ (the fixed rule; the floor of eisenstat_walker)
   int max_iterations = 1000;
+  // The inner tolerance of each outer iteration (harness/sim/forcing.hpp): fixed (linear.tol) or
+  // eisenstat_walker (choice 2 of Eisenstat & Walker 1996 from the outer residual's progress).
+  std::string forcing = "fixed";
+  double forcing_max = 0.9, forcing_gamma = 0.9, forcing_alpha = 2;
+  // The norm a solve stops on: dual (‖J M⁻¹ r_K‖ in the primal form; the dual system's own
+  // residual in the dual form), primal (the solved system's own ‖r‖₂/‖b‖₂) or energy (the
+  // preconditioned norm √(rᵀM⁻¹r) over its start value, the natural norm of PCG).
+  std::string stop_norm = "dual";
 };
 
 struct SolverSettings {
   int seed = 1;  // random starts of near-kernel candidates and λ_max estimates
   LinearSettings linear;
   AmgSettings amg;
+  CholmodSettings cholmod;
   HypreSettings hypre;
   MueluSettings muelu;
   XpbdSettings xpbd;

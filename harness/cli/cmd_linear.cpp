@@ -196,7 +196,7 @@ SolveOutcome solve_one(const CapturedSystem& sys, const std::string& name, const
     auto solver = make_linear_solver(name, q);
     Timer t;
     if (form == "primal") {
-      PrimalSolve primal(std::move(solver), sys.graph, q.linear.tol);
+      PrimalSolve primal(std::move(solver), sys.graph, q.linear);
       primal.setup(sys.grad, sys.alpha_tilde, sys.x, SetupKind::Structure, SetupContext{});
       o.setup_time = t.seconds();
       t.reset();

@@ -125,6 +125,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["linear_setup_time"] = L.linear_setup_time;
     r.datasets["linear_solve_time"] = L.linear_solve_time;
     r.datasets["linear_relative_residual"] = L.linear_relative_residual;
+    r.datasets["linear_tolerance"] = L.linear_tolerance;
     r.datasets["linear_setup_action"] = L.linear_setup_action;
     r.datasets["linear_history/residual"] = L.linear_history_residual;
     r.datasets["linear_history/time"] = L.linear_history_time;

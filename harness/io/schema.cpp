@@ -28,7 +28,7 @@ const ResultsSchema& results_schema() {
       expand({
           {"any", "string", {"level", "scene", "solver", "form_used", "status", "message", "git_sha", "machine", "created", "omp_wait_policy", "omp_spin_count"}},
           {"any", "int", {"omp_threads", "cpu_count"}},
-          {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "mpi_ranks", "setup_count", "refresh_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "primal_rows", "primal_nonzeros"}},
+          {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "factorisations", "factorise_time_total", "lagged_setups", "refactorisations_in_solve", "mpi_ranks", "setup_count", "refresh_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "primal_rows", "primal_nonzeros"}},
           {"any", "number", {"rows"}},
           {"simulation", "string", {"profile", "reference_method", "sweep_spec", "sweep_description", "sweep_params", "sweep_point", "sweep_key", "sweep_base"}},
           {"simulation", "int", {"outer_iterations", "substeps_total", "substeps_converged", "reference", "reference_substeps_unconverged", "sweep_index", "sweep_repeat"}},
@@ -41,7 +41,7 @@ const ResultsSchema& results_schema() {
       expand({
           {"any", "float", {"level_rows", "level_nnz"}},
           {"simulation", "int", {"frame", "substep", "iteration", "linear_iterations", "linear_history/offset", "reference/iterations"}},
-          {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "energy", "wall_time", "step_time", "step_length", "fill_time", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets"}},
+          {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "energy", "wall_time", "step_time", "step_length", "fill_time", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_tolerance", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets"}},
           {"simulation", "string", {"linear_setup_action", "reference/status"}},
           {"linear", "float", {"residual", "time", "solution"}},
       }),

@@ -7,14 +7,22 @@
 namespace xb {
 
 namespace {
-// Solvers that cannot stop on the dual residual (hypre, muelu) solve again for what is left;
-// each round gains about a factor tol, so a few rounds are always enough.
+// With linear.stop_norm = dual, solvers that cannot stop on the dual residual (hypre, muelu,
+// exact cholmod) solve again for what is left; each round gains about a factor tol, so a few
+// rounds are always enough. The logged final_relative_residual is the dual one in every norm.
 constexpr int kMaxRefinements = 4;
 }  // namespace
 
-PrimalSolve::PrimalSolve(std::unique_ptr<LinearSolver> solver, ConstraintGraph graph, double tol)
-    : solver_(std::move(solver)), sys_(std::move(graph)), tol_(tol) {
-  solver_judges_dual_ = solver_->set_relative_residual([this](const Vector& r) { return dual_relative(r); });
+PrimalSolve::PrimalSolve(std::unique_ptr<LinearSolver> solver, ConstraintGraph graph, const LinearSettings& linear)
+    : solver_(std::move(solver)), sys_(std::move(graph)), tol_(linear.tol), stop_on_dual_(linear.stop_norm == "dual") {
+  solver_->set_tolerance(tol_);
+  if (stop_on_dual_)
+    solver_judges_dual_ = solver_->set_relative_residual([this](const Vector& r) { return dual_relative(r); });
+}
+
+void PrimalSolve::set_tolerance(double tol) {
+  tol_ = tol;
+  solver_->set_tolerance(tol);
 }
 
 double PrimalSolve::dual_relative(const Vector& r_K) {
@@ -70,7 +78,8 @@ LinearStats PrimalSolve::solve(const Vector& b, Vector& dlambda) {
       total.residual_history.push_back(round_start * bnorm_);  // the exact value at the round's end
       total.residual_time.push_back(t.seconds());
     }
-    if (solver_judges_dual_) break;  // its own verdict stands, as on the dual form
+    // Its own verdict stands: it judged the dual residual itself, or the stop norm is its own.
+    if (solver_judges_dual_ || !stop_on_dual_) break;
     if (total.final_relative_residual <= tol_) {
       total.status = LinearStatus::converged;
       break;

@@ -2,6 +2,7 @@
 
 #include "stability.hpp"
 
+#include "forcing.hpp"
 #include "line_search.hpp"
 #include "primal_solve.hpp"
 #include "reference.hpp"
@@ -70,6 +71,7 @@ class Simulation {
     double time = 0;
     double fill = 0;    // s filling A or K (global methods)
     double length = 0;  // step length (global methods)
+    double tolerance = 0;  // the linear solve's relative tolerance (global methods)
     std::string action;
   };
   // The two residuals of one evaluation: the true one and the authors' (IterationLog).
@@ -83,8 +85,9 @@ class Simulation {
   Residuals log_state(int frame, int sub, int it, const LastStep& last, double& r0);
   // λ += Δλ, x += (ω or the line search's t)·Δx by Params::step; returns the step length.
   double apply_global_step();
-  // The method step from the state just evaluated; false if the run must stop.
-  bool step(int frame, int sub, int it, LastStep& last);
+  // The method step from the state just evaluated (whose stop metric is `residual`); false if
+  // the run must stop.
+  bool step(int frame, int sub, int it, double residual, LastStep& last);
   void fail(const std::string& status, const std::string& msg) {
     res_.status = status;
     res_.message = msg;
@@ -107,6 +110,7 @@ class Simulation {
   LinearSolver* active_ = nullptr;
   std::optional<ReferenceSolver> reference_;
   StabilityMonitor stability_;
+  ForcingRule forcing_;
   Eigen::Matrix3Xd x_pred_, x_old_, dx_, work_, x_ref_;
   double ref_scale_ = 0;  // ‖x_ref − x̃‖_M
   double excluded_ = 0;   // s of the substep spent on the reference and the error, taken off every clock
@@ -119,7 +123,8 @@ class Simulation {
 
 Simulation::Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt)
     : p_(p), method_(method), opt_(opt), prob_(prob), ds_(prob_), h_(p.dt / p.substeps),
-      alpha_tilde_(scaled_compliance(prob_, h_)), stability_(prob_, p) {
+      alpha_tilde_(scaled_compliance(prob_, h_)), stability_(prob_, p),
+      forcing_(p.linear) {
   if (opt.reference) {
     Timer ref_clock;
     reference_.emplace(prob_, p);
@@ -131,7 +136,7 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
   } else {
     res_.form_used = resolve_form(p.form, alpha_tilde_);
     if (res_.form_used == "primal")
-      primal_.emplace(make_linear_solver(method, p), constraint_graph(prob_), p.linear.tol);
+      primal_.emplace(make_linear_solver(method, p), constraint_graph(prob_), p.linear);
     else
       solver_ = make_linear_solver(method, p);
     active_ = primal_ ? &primal_->solver() : solver_.get();
@@ -219,7 +224,7 @@ void Simulation::substep(int frame, int sub) {
     if (it >= p_.max_iterations) break;
     if (over_budget(excluded_)) break;
     Timer step_clock;
-    if (!step(frame, sub, it, last)) break;
+    if (!step(frame, sub, it, stop_metric, last)) break;
     project_colliders(prob_, P.x);
     last.time = step_clock.seconds();
     ++res_.outer_iterations;
@@ -272,6 +277,7 @@ Simulation::Residuals Simulation::log_state(int frame, int sub, int it, const La
   L.linear_setup_time.push_back(s.linear.setup_time);
   L.linear_solve_time.push_back(s.linear.solve_time);
   L.linear_relative_residual.push_back(s.linear.final_relative_residual);
+  L.linear_tolerance.push_back(s.tolerance);
   L.linear_setup_action.push_back(s.action);
   L.linear_history_residual.insert(L.linear_history_residual.end(), s.linear.residual_history.begin(),
                                    s.linear.residual_history.end());
@@ -283,7 +289,7 @@ Simulation::Residuals Simulation::log_state(int frame, int sub, int it, const La
   return {dual, authors};
 }
 
-bool Simulation::step(int frame, int sub, int it, LastStep& last) {
+bool Simulation::step(int frame, int sub, int it, double residual, LastStep& last) {
   Particles& P = prob_.particles;
   if (local_) {
     local_->sweep(P.x, lambda_, alpha_tilde_, state_);
@@ -303,6 +309,11 @@ bool Simulation::step(int frame, int sub, int it, LastStep& last) {
   }
   const SetupKind kind = first_setup_ ? SetupKind::Structure : SetupKind::Values;
   first_setup_ = false;
+  last.tolerance = forcing_.next(it, residual);
+  if (primal_)
+    primal_->set_tolerance(last.tolerance);
+  else
+    solver_->set_tolerance(last.tolerance);
   if (primal_) {
     primal_->setup(state_.grad, alpha_tilde_, P.x, kind, SetupContext{frame, sub, it});
     last.fill = primal_->fill_time();

@@ -44,6 +44,7 @@ struct IterationLog {
   std::vector<double> step_length;
   std::vector<long long> linear_iterations;
   std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
+  std::vector<double> linear_tolerance;  // the relative tolerance that step was given (linear.forcing)
   std::vector<std::string> linear_setup_action;
   // Residual histories of every linear solve, concatenated; solve k of entry i owns
   // [linear_history_offset[i], linear_history_offset[i+1]).

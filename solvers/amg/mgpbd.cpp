@@ -22,9 +22,10 @@ namespace {
 class MgpbdSolver final : public LinearSolver {
  public:
   explicit MgpbdSolver(const SolverSettings& p)
-      : opt_(amg::AmgOptions::from_settings(p)),
-        tol_(p.linear.tol),
+      : LinearSolver(p.linear.tol),
+        opt_(amg::AmgOptions::from_settings(p)),
         maxit_(p.linear.max_iterations),
+        natural_(p.linear.stop_norm == "energy"),
         policy_(p.amg.setup_interval) {
     // Fail on bad names now, not at the first setup inside a run.
     amg::check_option_names(opt_);
@@ -77,7 +78,7 @@ class MgpbdSolver final : public LinearSolver {
       return st;
     }
     Preconditioner M = [this](const Vector& r, Vector& z) { h_.vcycle(r, z); };
-    st = pcg(*A_, b, x, M, tol_, maxit_, rel_);
+    st = pcg(*A_, b, x, M, tolerance(), maxit_, rel_, natural_);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
@@ -108,8 +109,8 @@ class MgpbdSolver final : public LinearSolver {
 
  private:
   amg::AmgOptions opt_;
-  double tol_;
   int maxit_;
+  bool natural_;
   SetupPolicy policy_;
   RelativeResidual rel_;
   amg::Hierarchy h_;

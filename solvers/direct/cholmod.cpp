@@ -1,8 +1,14 @@
-// Goldenthal's fast projection: a direct Cholesky solve of the global dual system with CHOLMOD
+// Goldenthal's fast projection: a direct Cholesky solve of the global system with CHOLMOD
 // (supernodal LLᵀ). The symbolic analysis (fill-reducing ordering, supernodes) is done once per
-// sparsity pattern; the numeric factorisation once per matrix.
+// sparsity pattern; the numeric factorisation once per matrix (cholmod.refactor = always).
+// cholmod.refactor = lagged: the factor of an earlier matrix preconditions CG on the current one
+// (a factor a few outer iterations old is close to the current matrix when the step changes it
+// little); it is factorised again at the first setup of every frame, and inside a solve whose CG
+// with the old factor needs more than cholmod.lagged_max_iterations (the solve then goes on from
+// where that CG stopped, with the new factor).
 #include "../factories.hpp"
 #include "../kernels.hpp"
+#include "../krylov/pcg.hpp"
 #include "../timer.hpp"
 
 #include "../../core/error.hpp"
@@ -17,14 +23,22 @@ namespace xb {
 namespace {
 class CholmodSolver final : public LinearSolver {
  public:
-  CholmodSolver() { cholmod_start(&c_); c_.quick_return_if_not_posdef = 1; }
+  explicit CholmodSolver(const SolverSettings& p)
+      : LinearSolver(p.linear.tol),
+        lagged_(p.cholmod.refactor == "lagged"),
+        lagged_max_(p.cholmod.lagged_max_iterations),
+        max_iterations_(p.linear.max_iterations),
+        natural_(p.linear.stop_norm == "energy") {
+    cholmod_start(&c_);
+    c_.quick_return_if_not_posdef = 1;
+  }
   ~CholmodSolver() override {
     if (L_) cholmod_free_factor(&L_, &c_);
     cholmod_finish(&c_);
   }
   std::string name() const override { return "cholmod"; }
 
-  void setup(const SparseMatrix& A, SetupKind kind, const SetupContext&) override {
+  void setup(const SparseMatrix& A, SetupKind kind, const SetupContext& ctx) override {
     Timer t;
     A_ = &A;
     // A row-major CSR of a symmetric matrix is, read as CSC, the same matrix; stype = 1 tells
@@ -41,12 +55,57 @@ class CholmodSolver final : public LinearSolver {
     view_.dtype = CHOLMOD_DOUBLE;
     view_.sorted = 1;
     view_.packed = 1;
-    action_ = "factorise";
     if (kind == SetupKind::Structure || !L_) {
       if (L_) cholmod_free_factor(&L_, &c_);
       L_ = cholmod_analyze(&view_, &c_);
-      action_ = "analyse+factorise";
+      factorise("analyse+factorise");
+    } else if (lagged_ && factor_ok_ && ctx.frame == factor_frame_) {
+      fresh_ = false;  // keep the factor of an earlier matrix
+      action_ = "lagged";
+      ++lagged_setups_;
+    } else {
+      factorise("factorise");
     }
+    factor_frame_ = ctx.frame;
+    setup_time_ = t.seconds();
+  }
+
+  bool set_relative_residual(RelativeResidual rel) override {
+    rel_ = std::move(rel);
+    return lagged_;  // the exact solve has no loop to judge with; the caller refines it
+  }
+
+  LinearStats solve(const Vector& b, Vector& x) override {
+    LinearStats st;
+    if (lagged_ && factor_ok_) {
+      st = solve_lagged(b, x);
+    } else {
+      st = solve_exact(b, x);
+    }
+    st.setup_time = setup_time_;
+    setup_time_ = 0;
+    return st;
+  }
+
+  std::map<std::string, double> statistics() const override {
+    std::map<std::string, double> s;
+    if (L_) {
+      s["factor_nnz"] = c_.lnz;
+      s["factor_flops"] = c_.fl;
+    }
+    s["factorisations"] = factorisations_;
+    s["factorise_time_total"] = factorise_time_;
+    if (lagged_) {
+      s["lagged_setups"] = lagged_setups_;
+      s["refactorisations_in_solve"] = refactors_in_solve_;
+    }
+    return s;
+  }
+  std::string last_setup_action() const override { return action_; }
+
+ private:
+  void factorise(const char* action) {
+    Timer t;
     factor_ok_ = L_ && cholmod_factorize(&view_, L_, &c_) && c_.status == CHOLMOD_OK;
     if (!L_)
       message_ = "CHOLMOD analysis failed";
@@ -54,13 +113,32 @@ class CholmodSolver final : public LinearSolver {
       message_ = "matrix not positive definite (CHOLMOD failed at column " + std::to_string(L_->minor) + ")";
     else if (!factor_ok_)
       message_ = "CHOLMOD factorisation failed (status " + std::to_string(c_.status) + ")";
-    setup_time_ = t.seconds();
+    fresh_ = true;
+    action_ = action;
+    ++factorisations_;
+    factorise_time_ += t.seconds();
   }
 
-  LinearStats solve(const Vector& b, Vector& x) override {
+  // x = L⁻ᵀL⁻¹ b with the current factor; false if CHOLMOD failed.
+  bool apply_factor(const Vector& b, Vector& x) {
+    cholmod_dense bd{};
+    bd.nrow = b.size();
+    bd.ncol = 1;
+    bd.nzmax = b.size();
+    bd.d = b.size();
+    bd.x = const_cast<double*>(b.data());
+    bd.xtype = CHOLMOD_REAL;
+    bd.dtype = CHOLMOD_DOUBLE;
+    cholmod_dense* xd = cholmod_solve(CHOLMOD_A, L_, &bd, &c_);
+    if (!xd) return false;
+    x.resize(b.size());
+    std::copy(static_cast<double*>(xd->x), static_cast<double*>(xd->x) + b.size(), x.data());
+    cholmod_free_dense(&xd, &c_);
+    return true;
+  }
+
+  LinearStats solve_exact(const Vector& b, Vector& x) {
     LinearStats st;
-    st.setup_time = setup_time_;
-    setup_time_ = 0;
     Timer t;
     const double bnorm = norm2(b);
     st.residual_history.push_back(bnorm);
@@ -71,22 +149,11 @@ class CholmodSolver final : public LinearSolver {
       st.message = message_;
       return st;
     }
-    cholmod_dense bd{};
-    bd.nrow = b.size();
-    bd.ncol = 1;
-    bd.nzmax = b.size();
-    bd.d = b.size();
-    bd.x = const_cast<double*>(b.data());
-    bd.xtype = CHOLMOD_REAL;
-    bd.dtype = CHOLMOD_DOUBLE;
-    cholmod_dense* xd = cholmod_solve(CHOLMOD_A, L_, &bd, &c_);
-    if (!xd) {
+    if (!apply_factor(b, x)) {
       st.status = LinearStatus::breakdown;
       st.message = "CHOLMOD solve failed";
       return st;
     }
-    std::copy(static_cast<double*>(xd->x), static_cast<double*>(xd->x) + b.size(), x.data());
-    cholmod_free_dense(&xd, &c_);
     st.solve_time = t.seconds();
     Vector r;
     residual(*A_, x, b, r);
@@ -102,27 +169,73 @@ class CholmodSolver final : public LinearSolver {
     return st;
   }
 
-  std::map<std::string, double> statistics() const override {
-    std::map<std::string, double> s;
-    if (L_) {
-      s["factor_nnz"] = c_.lnz;
-      s["factor_flops"] = c_.fl;
+  // CG preconditioned by the factor; with an old factor at most lagged_max_iterations, then a
+  // new factor and CG again on what is left (b − Ax), judged against the original b.
+  LinearStats solve_lagged(const Vector& b, Vector& x) {
+    Timer t;
+    const double bnorm = norm2(b);
+    const RelativeResidual judge = rel_ ? rel_ : RelativeResidual([bnorm](const Vector& r) { return norm2(r) / bnorm; });
+    Preconditioner M = [this](const Vector& r, Vector& z) {
+      if (!apply_factor(r, z)) throw Error("CHOLMOD solve failed");
+    };
+    const bool stale = !fresh_;
+    LinearStats st = pcg(*A_, b, x, M, tolerance(), stale ? lagged_max_ : max_iterations_, judge, natural_);
+    if (st.status != LinearStatus::max_iterations || !stale) {
+      st.solve_time = t.seconds();
+      return st;
     }
-    return s;
+    // The old factor was not good enough: factorise A and solve for the rest.
+    factorise("lagged+factorise");
+    ++refactors_in_solve_;
+    if (!factor_ok_) {
+      st.status = LinearStatus::breakdown;
+      st.message = message_;
+      return st;
+    }
+    Vector r, dx;
+    residual(*A_, x, b, r);
+    const double rnorm = norm2(r);
+    double tol = tolerance();
+    if (natural_) {  // the same stop test as one CG from zero: relative to b's natural norm
+      Vector zb, zr;
+      apply_factor(b, zb);
+      apply_factor(r, zr);
+      tol *= std::sqrt(std::max(0.0, dot(b, zb)) / std::max(1e-300, dot(r, zr)));
+    }
+    const double t0 = t.seconds();
+    LinearStats more = pcg(*A_, r, dx, M, tol, max_iterations_, judge, natural_);
+    x += dx;
+    // pcg logs judge(r)·‖its b‖: in units of the original ‖b‖ from here on.
+    for (size_t k = 1; k < more.residual_history.size(); ++k) {
+      st.residual_history.push_back(more.residual_history[k] * bnorm / std::max(rnorm, 1e-300));
+      st.residual_time.push_back(t0 + more.residual_time[k]);
+    }
+    st.iterations += more.iterations;
+    st.status = more.status;
+    st.message = more.message;
+    Vector rtrue;
+    residual(*A_, x, b, rtrue);
+    st.final_relative_residual = judge(rtrue);
+    st.solve_time = t.seconds();
+    return st;
   }
-  std::string last_setup_action() const override { return action_; }
 
- private:
   cholmod_common c_{};
   cholmod_factor* L_ = nullptr;
   cholmod_sparse view_{};
   const SparseMatrix* A_ = nullptr;
-  bool factor_ok_ = false;
+  const bool lagged_;
+  const int lagged_max_, max_iterations_;
+  const bool natural_;
+  RelativeResidual rel_;
+  bool factor_ok_ = false, fresh_ = false;
+  int factor_frame_ = -1;
   std::string message_, action_;
-  double setup_time_ = 0;
+  double setup_time_ = 0, factorise_time_ = 0;
+  int factorisations_ = 0, lagged_setups_ = 0, refactors_in_solve_ = 0;
 };
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_cholmod(const SolverSettings&) { return std::make_unique<CholmodSolver>(); }
+std::unique_ptr<LinearSolver> make_cholmod(const SolverSettings& p) { return std::make_unique<CholmodSolver>(p); }
 
 }  // namespace xb

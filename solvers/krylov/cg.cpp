@@ -11,7 +11,9 @@ namespace xb {
 namespace {
 class CgSolver final : public LinearSolver {
  public:
-  CgSolver(const SolverSettings& p, bool jacobi) : tol_(p.linear.tol), maxit_(p.linear.max_iterations), jacobi_(jacobi) {}
+  CgSolver(const SolverSettings& p, bool jacobi)
+      : LinearSolver(p.linear.tol), maxit_(p.linear.max_iterations), natural_(p.linear.stop_norm == "energy"),
+        jacobi_(jacobi) {}
   std::string name() const override { return jacobi_ ? "jacobi-pcg" : "cg"; }
 
   void setup(const SparseMatrix& A, SetupKind, const SetupContext&) override {
@@ -37,16 +39,15 @@ class CgSolver final : public LinearSolver {
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < r.size(); ++i) z[i] = inv_diag_[i] * r[i];
       };
-    LinearStats st = pcg(*A_, b, x, M, tol_, maxit_, rel_);
+    LinearStats st = pcg(*A_, b, x, M, tolerance(), maxit_, rel_, natural_);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
   }
 
  private:
-  double tol_;
   int maxit_;
-  bool jacobi_;
+  bool natural_, jacobi_;
   const SparseMatrix* A_ = nullptr;
   Vector inv_diag_;
   RelativeResidual rel_;

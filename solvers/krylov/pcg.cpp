@@ -8,7 +8,7 @@
 namespace xb {
 
 LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Preconditioner& precond, double tol,
-                int max_iterations, const RelativeResidual& rel) {
+                int max_iterations, const RelativeResidual& rel, bool natural_norm) {
   LinearStats st;
   Timer clock;
   const long n = b.size();
@@ -36,6 +36,7 @@ LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Precond
   apply_precond(r, z);
   p = z;
   double rz = dot(r, z);
+  const double rz0 = rz;
   st.status = LinearStatus::max_iterations;
   for (int k = 0; k < max_iterations; ++k) {
     const double pAp = spmv_dot(A, p, Ap);
@@ -55,12 +56,16 @@ LinearStats pcg(const SparseMatrix& A, const Vector& b, Vector& x, const Precond
       st.message = "residual is not finite";
       break;
     }
-    if (rnorm <= tol * bnorm) {
+    if (!natural_norm && rnorm <= tol * bnorm) {
       st.status = LinearStatus::converged;
       break;
     }
     apply_precond(r, z);
     const double rz_new = dot(r, z);
+    if (natural_norm && rz_new >= 0 && std::sqrt(rz_new) <= tol * std::sqrt(rz0)) {
+      st.status = LinearStatus::converged;
+      break;
+    }
     const double beta = rz_new / rz;
     rz = rz_new;
 #pragma omp parallel for schedule(static)

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <numeric>
 
@@ -89,7 +90,7 @@ long long g_next_id = 1;
 
 class DistributedSolver final : public LinearSolver {
  public:
-  DistributedSolver(const std::string& name, const SolverSettings& p) : name_(name), tol_(p.linear.tol) {
+  DistributedSolver(const std::string& name, const SolverSettings& p) : LinearSolver(p.linear.tol), name_(name) {
     id_ = g_next_id++;
     if (mpi_size() > 1) {
       Header h;
@@ -169,19 +170,21 @@ class DistributedSolver final : public LinearSolver {
     require_finite(b.data(), b.size(), "the right-hand side");
     Timer t;
     std::vector<double> bl, xl;
+    const double tol = tolerance();
     if (mpi_size() > 1) {
       Header h;
       h.cmd = kSolve;
       h.id = id_;
       h.n_global = n_;
       h.block_size = block_size_;
+      std::memcpy(&h.tol_bits, &tol, sizeof tol);
       bcast_header(h);
       scatter_vector(b.data(), n_, block_size_, bl);
     } else {
       bl.assign(b.data(), b.data() + b.size());
     }
     LinearStats st;
-    collective([&] { st = kernel_->solve(bl, xl); });
+    collective([&] { st = kernel_->solve(bl, xl, tol); });
     x.resize(n_);
     if (mpi_size() > 1) gather_vector(xl, n_, block_size_, x.data());
     else std::copy(xl.begin(), xl.end(), x.data());
@@ -231,7 +234,6 @@ class DistributedSolver final : public LinearSolver {
   }
 
   std::string name_;
-  double tol_;
   long long id_ = 0;
   std::unique_ptr<DistributedKernel> kernel_;
   const SparseMatrix* A_ = nullptr;
@@ -299,8 +301,10 @@ int serve_workers() {
           std::vector<double> bl, xl;
           const int bs = static_cast<int>(h.block_size);
           scatter_vector(nullptr, h.n_global, bs, bl);
+          double tol = 0;
+          std::memcpy(&tol, &h.tol_bits, sizeof tol);
           // A failed solve on any rank: rank 0 throws and gathers nothing.
-          if (agree_on_errors(caught([&] { kernels.at(id)->solve(bl, xl); })).empty())
+          if (agree_on_errors(caught([&] { kernels.at(id)->solve(bl, xl, tol); })).empty())
             gather_vector(xl, h.n_global, bs, nullptr);
           break;
         }

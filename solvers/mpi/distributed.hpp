@@ -49,9 +49,9 @@ class DistributedKernel {
   virtual ~DistributedKernel() = default;
   // kind == Values: same pattern as the previous call, only A.vals differ.
   virtual void setup(const RowBlock& A, SetupKind kind, const SetupContext& ctx) = 0;
-  // b and x are this rank's blocks (x is written). Zero initial guess. The returned
-  // residual_history is the global one (all ranks get the same numbers).
-  virtual LinearStats solve(const std::vector<double>& b, std::vector<double>& x) = 0;
+  // b and x are this rank's blocks (x is written). Zero initial guess, relative tolerance tol.
+  // The returned residual_history is the global one (all ranks get the same numbers).
+  virtual LinearStats solve(const std::vector<double>& b, std::vector<double>& x, double tol) = 0;
 
   // The hierarchy of the last setup: levels, complexities, setup counts, level sizes.
   std::map<std::string, double> statistics() const;

@@ -20,6 +20,7 @@ struct Header {
   long long n_global = 0;     // setup, solve
   long long block_size = 1;   // setup, solve
   long long near_kernel_cols = 0;  // setup
+  long long tol_bits = 0;     // solve: the relative tolerance, a double's bits
 };
 
 // Non-blocking broadcast; waiting ranks sleep between tests instead of spinning.

@@ -1,8 +1,9 @@
 // hypre: BoomerAMG (one V-cycle) as the preconditioner of hypre's ParCSR PCG, on the rows of
 // this rank (contiguous blocks, see distributed.hpp).
 //
-// Stopping test: HYPRE_PCGSetTwoNorm(1) makes PCG stop on ‖r‖₂ ≤ tol·‖b‖₂ (its default is the
-// C-norm <C r, r>); absolute tolerance 0; zero initial guess.
+// Stopping test: HYPRE_PCGSetTwoNorm(1) makes PCG stop on ‖r‖₂ ≤ tol·‖b‖₂; with
+// linear.stop_norm = energy, TwoNorm(0): the C-norm √<C r, r> over √<C b, b> (C the V-cycle),
+// PCG's natural norm. Absolute tolerance 0; zero initial guess; tol set per solve.
 // Residual history: BoomerAMG is wrapped in our own preconditioner callback, which PCG calls with
 // the current (recurrence) residual r_j of every iteration; the callback records ‖r_j‖₂ (one
 // extra inner product per iteration) and the time since the start of the solve, then runs the
@@ -163,9 +164,8 @@ class HypreKernel final : public DistributedKernel {
     }
     // PCG is cheap to set up; a fresh one per matrix keeps its work vectors and matvec current.
     HYPRE_ParCSRPCGCreate(MPI_COMM_WORLD, &pcg_);
-    HYPRE_PCGSetTol(pcg_, p_.linear.tol);
     HYPRE_PCGSetAbsoluteTol(pcg_, 0.0);
-    HYPRE_PCGSetTwoNorm(pcg_, 1);  // stop on ‖r‖₂/‖b‖₂, not the C-norm
+    HYPRE_PCGSetTwoNorm(pcg_, p_.linear.stop_norm == "energy" ? 0 : 1);
     HYPRE_PCGSetMaxIter(pcg_, p_.linear.max_iterations);
     HYPRE_PCGSetPrintLevel(pcg_, 0);
     HYPRE_PCGSetLogging(pcg_, 1);
@@ -174,9 +174,10 @@ class HypreKernel final : public DistributedKernel {
     check(HYPRE_ParCSRPCGSetup(pcg_, A_, b_, x_), "PCGSetup");
   }
 
-  LinearStats solve(const std::vector<double>& b, std::vector<double>& x) override {
+  LinearStats solve(const std::vector<double>& b, std::vector<double>& x, double tol) override {
     LinearStats st;
     if (!pcg_) throw Error("hypre: solve() before setup()");
+    HYPRE_PCGSetTol(pcg_, tol);
     set_vector(b_ij_, b.data());
     std::vector<double> zero(n_local_, 0.0);
     set_vector(x_ij_, zero.data());
@@ -216,7 +217,7 @@ class HypreKernel final : public DistributedKernel {
     if (!std::isfinite(rel)) {
       st.status = LinearStatus::breakdown;
       st.message = "hypre PCG: residual is not finite";
-    } else if (rel <= p_.linear.tol) {
+    } else if (rel <= tol) {
       st.status = LinearStatus::converged;
     } else if (iters >= p_.linear.max_iterations) {
       st.status = LinearStatus::max_iterations;

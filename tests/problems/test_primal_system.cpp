@@ -90,7 +90,7 @@ void expect_primal_matches_dual(const Case& c) {
   // 1e-10 the stiff bar's recomputed residual was 4e-10.)
   p.linear.tol = 1e-8;
   p.linear.max_iterations = 100000;
-  PrimalSolve solve(make_linear_solver("jacobi-pcg", p), constraint_graph(c.prob), p.linear.tol);
+  PrimalSolve solve(make_linear_solver("jacobi-pcg", p), constraint_graph(c.prob), p.linear);
   solve.setup(c.s.grad, c.alpha_tilde, c.prob.particles.x, SetupKind::Structure, SetupContext{});
   Vector dl_iter;
   const LinearStats st = solve.solve(b, dl_iter);

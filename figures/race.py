@@ -1,0 +1,153 @@
+#!/usr/bin/env python3
+"""`make race`: the simulation-level race of figures/race.toml, one process per run.
+
+usage: python3 figures/race.py [--bench build/xpbd-bench] [--spec figures/race.toml]
+                               [--out plots/race] [--only squash,cloth_hang] [--sizes 0,1]
+                               [--methods mgpbd,cholmod] [--fresh] [--dry-run]
+
+Every run is `xpbd-bench run` in a process of its own (a later run in the same process would reuse
+the earlier one's freed pages), into OUT/data/<scene>/<size>/<method>.<form>.<forcing>.h5; a file
+that exists is a finished run and is not run again (--fresh starts over). Per scene, each global
+method's form is chosen at the smallest size (both forms run there with linear.forcing = fixed;
+the one with the lower time per outer iteration wins) and kept for the larger sizes. The local
+method (xpbd-gs) gets as much wall time as exact CHOLMOD's frame took. Then plots/race.py draws
+OUT/race_<scene>.png, OUT/race_crossover.png and writes OUT/summary.md.
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+import tomllib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+import race as race_plots  # noqa: E402
+import xbruns  # noqa: E402
+
+LOCAL_MAX_ITERATIONS = 100000  # a sweep method stops on its time budget, not on a count
+
+
+def run_file(out, scene, size, method, form, forcing):
+    safe = re.sub(r"[^A-Za-z0-9._-]", "_", size)
+    return os.path.join(out, "data", scene, safe, f"{method}.{form}.{forcing}.h5")
+
+
+def sets_of(*tables):
+    out = {}
+    for t in tables:
+        out.update(t or {})
+    return out
+
+
+def set_args(sets):
+    args = []
+    for k, v in sets.items():
+        args += ["--set", f"{k}={race_plots.toml_text(v)}"]
+    return args
+
+
+def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
+    """Runs one race entry into `path` (skipped if it exists). Returns the run's dict or None."""
+    if not os.path.exists(path):
+        cmd = [bench, "run", "--scene", scene, "--solver", solver, "--time-budget", f"{budget:g}",
+               *(["--form", form] if form != "none" else []), *set_args(sets), "--out", path + ".part"]
+        print("race:", " ".join(cmd), flush=True)
+        if dry_run:
+            return None
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        if os.path.exists(path + ".part"):
+            os.remove(path + ".part")
+        t0 = time.time()
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL)
+        if done.returncode != 0 or not os.path.exists(path + ".part"):
+            print(f"race: exit {done.returncode}; nothing recorded for {path}", file=sys.stderr)
+            return None
+        os.replace(path + ".part", path)
+        print(f"race: {time.time() - t0:.1f} s", flush=True)
+    runs = xbruns.load(path, datasets=race_plots.DATASETS)
+    return runs[-1] if runs else None
+
+
+def choose_form(args, spec, scene_name, scene, size, method, m):
+    """The form of `method` for this scene: both forms at the smallest size, the faster per outer
+    iteration (fixed forcing)."""
+    timing = {}
+    for form in ("dual", "primal"):
+        sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"linear.forcing": "fixed"})
+        path = run_file(args.out, scene_name, size["label"], method, form, "fixed")
+        r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, spec["time_budget"], args.dry_run)
+        if r is not None and r["attrs"].get("status") in ("ok", "max_iterations") and r["attrs"]["outer_iterations"] > 0:
+            timing[form] = float(r["attrs"]["wall_time"]) / float(r["attrs"]["outer_iterations"])
+    if not timing:
+        return "primal"
+    return min(timing, key=timing.get)
+
+
+def run_scene(args, spec, scene_name, scene):
+    sizes = scene["sizes"]
+    chosen = [int(i) for i in args.sizes.split(",")] if args.sizes else range(len(sizes))
+    methods = {k: v for k, v in spec["methods"].items() if not args.methods or k in args.methods.split(",")}
+    forms = {}
+    for name, m in methods.items():
+        if not m.get("local"):
+            forms[name] = choose_form(args, spec, scene_name, scene, sizes[0], name, m)
+    print(f"race: {scene_name} forms: " + ", ".join(f"{k} {v}" for k, v in forms.items()), flush=True)
+    for i in chosen:
+        size = sizes[i]
+        exact_time = None
+        for name, m in methods.items():
+            if m.get("local"):
+                continue
+            for forcing in (spec["forcing"] if m.get("forcing", True) else ["fixed"]):
+                sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"linear.forcing": forcing})
+                path = run_file(args.out, scene_name, size["label"], name, forms[name], forcing)
+                r = run_one(args.bench, path, scene["scene"], m["solver"], forms[name], sets, spec["time_budget"],
+                            args.dry_run)
+                if name == "cholmod" and r is not None:
+                    exact_time = float(r["attrs"]["wall_time"])
+        for name, m in methods.items():
+            if not m.get("local"):
+                continue
+            budget = exact_time if exact_time else spec["time_budget"]
+            sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"max_iterations": LOCAL_MAX_ITERATIONS})
+            path = run_file(args.out, scene_name, size["label"], name, "none", "none")
+            run_one(args.bench, path, scene["scene"], m["solver"], "none", sets, budget, args.dry_run)
+    return forms
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bench", default=os.path.join(ROOT, "build", "xpbd-bench"))
+    ap.add_argument("--spec", default=os.path.join(HERE, "race.toml"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "plots", "race"))
+    ap.add_argument("--only", default="", help="comma-separated scene names of the spec")
+    ap.add_argument("--sizes", default="", help="comma-separated size indices (0 = smallest)")
+    ap.add_argument("--methods", default="", help="comma-separated method labels of the spec")
+    ap.add_argument("--fresh", action="store_true", help="delete OUT/data first")
+    ap.add_argument("--dry-run", action="store_true", help="print the commands only")
+    args = ap.parse_args()
+    try:
+        with open(args.spec, "rb") as fh:
+            spec = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as e:
+        sys.exit(f"{args.spec}: {e}")
+    if not os.access(args.bench, os.X_OK):
+        sys.exit(f"{args.bench}: not an executable (build first: make build)")
+    scenes = {k: v for k, v in spec["scenes"].items() if not args.only or k in args.only.split(",")}
+    unknown = set(filter(None, args.only.split(","))) - set(spec["scenes"])
+    if unknown:
+        sys.exit(f"--only: unknown scene(s) {', '.join(sorted(unknown))} (spec has {', '.join(spec['scenes'])})")
+    if args.fresh and os.path.isdir(os.path.join(args.out, "data")):
+        shutil.rmtree(os.path.join(args.out, "data"))
+    for name, scene in scenes.items():
+        run_scene(args, spec, name, scene)
+    if not args.dry_run:
+        race_plots.draw(os.path.join(args.out, "data"), args.out, spec)
+
+
+if __name__ == "__main__":
+    main()

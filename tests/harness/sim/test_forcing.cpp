@@ -1,0 +1,87 @@
+// linear.forcing: the Eisenstat–Walker sequence (choice 2, safeguard, cap, floor) against its
+// formula, and a simulation that records and honours it.
+#include "harness/params.hpp"
+#include "harness/sim/forcing.hpp"
+#include "harness/sim/stepper.hpp"
+#include "problems/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace xb;
+
+namespace {
+LinearSettings eisenstat_walker(double tol, double max) {
+  LinearSettings s;
+  s.forcing = "eisenstat_walker";
+  s.tol = tol;
+  s.forcing_max = max;
+  s.forcing_gamma = 0.9;
+  s.forcing_alpha = 2;
+  return s;
+}
+}  // namespace
+
+TEST(Forcing, FixedIsTheTolerance) {
+  LinearSettings s;
+  s.tol = 1e-6;
+  ForcingRule f(s);
+  EXPECT_EQ(f.next(0, 1.0), 1e-6);
+  EXPECT_EQ(f.next(1, 0.5), 1e-6);
+}
+
+// A recorded outer residual history, each η worked out by hand from η_k = γ (r_k/r_{k−1})^α,
+// the safeguard max(η_k, γ η_{k−1}^α) while γ η_{k−1}^α > 0.1, the cap and the floor.
+TEST(Forcing, EisenstatWalkerChoiceTwo) {
+  ForcingRule f(eisenstat_walker(1e-8, 0.9));
+  EXPECT_DOUBLE_EQ(f.next(0, 1.0), 0.9);                      // η_0 = η_max
+  EXPECT_DOUBLE_EQ(f.next(1, 0.5), 0.9 * 0.9 * 0.9);          // raw 0.225 < safeguard 0.729
+  EXPECT_DOUBLE_EQ(f.next(2, 0.05), 0.9 * 0.729 * 0.729);     // raw 0.009 < safeguard 0.478
+  const double eta2 = 0.9 * 0.729 * 0.729;
+  EXPECT_DOUBLE_EQ(f.next(3, 5e-4), 0.9 * eta2 * eta2);       // raw 9e-5 < safeguard 0.206
+  const double eta3 = 0.9 * eta2 * eta2;
+  ASSERT_LT(0.9 * eta3 * eta3, 0.1);                          // the safeguard is off from here
+  EXPECT_DOUBLE_EQ(f.next(4, 5e-6), 0.9 * 1e-4);              // raw 9e-5
+  EXPECT_DOUBLE_EQ(f.next(5, 1e-5), 0.9);                     // raw 3.6: the cap
+  EXPECT_DOUBLE_EQ(f.next(0, 2.0), 0.9);                      // a new substep starts again
+}
+
+TEST(Forcing, EisenstatWalkerIsFlooredByTheToleranceAndCappedByTheMaximum) {
+  ForcingRule f(eisenstat_walker(1e-3, 0.5));
+  EXPECT_DOUBLE_EQ(f.next(0, 1.0), 0.5);
+  EXPECT_DOUBLE_EQ(f.next(1, 0.9), 0.5);                      // raw 0.729: capped
+  EXPECT_DOUBLE_EQ(f.next(2, 9e-3), 0.9 * 0.5 * 0.5);         // raw 9e-5, safeguard 0.225
+  EXPECT_DOUBLE_EQ(f.next(3, 9e-5), 1e-3);                    // raw 9e-5, safeguard 0.046 < 0.1: the floor
+}
+
+// A simulation records the η of every step, computed from its own dual residuals, and every
+// solve meets the η it was given (mgpbd judges the dual residual in both forms).
+TEST(Forcing, SimulationRecordsAndHonoursTheSequence) {
+  for (const char* form : {"dual", "primal"}) {
+    Params p;
+    p.scene = "bar_hang";
+    p.resolution = 3;
+    p.aspect = 3;
+    p.frames = 2;
+    p.max_iterations = 8;
+    p.rtol = 1e-10;
+    p.form = form;
+    set_param(p, "linear.forcing", "eisenstat_walker", "test");
+    set_param(p, "linear.tol", "1e-6", "test");
+    const RunResult r = run_simulation(build_problem(p), p, "mgpbd");
+    ASSERT_NE(r.status, "error") << r.message;
+    const IterationLog& L = r.log;
+    ForcingRule f(p.linear);
+    bool loose = false;
+    for (size_t i = 0; i + 1 < L.iteration.size(); ++i) {
+      if (L.iteration[i + 1] == 0) continue;  // the last entry of a substep took no step
+      const double eta = f.next(static_cast<int>(L.iteration[i]), L.dual_residual[i]);
+      EXPECT_DOUBLE_EQ(L.linear_tolerance[i + 1], eta) << form << " entry " << i + 1;
+      EXPECT_LE(L.linear_relative_residual[i + 1], eta * 1.0001) << form << " entry " << i + 1;
+      loose = loose || eta > 1e-3;
+    }
+    EXPECT_TRUE(loose) << "some step must have been solved loosely";
+    EXPECT_EQ(L.linear_tolerance[0], 0);
+  }
+}
