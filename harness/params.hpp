@@ -1,13 +1,13 @@
 // The one flat key space users see: the scene's settings, the stepper's and every solver's,
 // composed from the tables each component owns (problems/scene_settings.hpp,
-// harness/sim/stepper_settings.hpp, solvers/solver_settings.hpp). Defaults, scene and profile
+// harness/stepper_settings.hpp, solvers/solver_settings.hpp). Defaults, scene and profile
 // TOML, --set key=value, sweeps and the HDF5 attributes of a run all go through param_fields(),
 // so a key is spelled the same everywhere.
 #pragma once
 
 #include "../problems/scene_settings.hpp"
 #include "../solvers/solver_settings.hpp"
-#include "sim/stepper_settings.hpp"
+#include "stepper_settings.hpp"
 
 #include <string>
 

@@ -56,6 +56,12 @@ void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, Constr
   }
 }
 
+void project_onto_planes(const Problem& prob, Eigen::Matrix3Xd& x) {
+  for (const auto& plane : prob.planes)
+    for (int p = 0; p < static_cast<int>(x.cols()); ++p)
+      if (prob.particles.w[p] > 0 && x(1, p) < plane.height) x(1, p) = plane.height;
+}
+
 Eigen::VectorXd scaled_compliance(const Problem& prob, double dt) {
   const int m = prob.num_constraints();
   Eigen::VectorXd a(m);

@@ -50,6 +50,9 @@ struct ConstraintState {
 // Evaluates every constraint at x (in parallel).
 void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, ConstraintState& out);
 
+// Projects every free particle below a plane collider onto it (after each step, as the paper does).
+void project_onto_planes(const Problem& prob, Eigen::Matrix3Xd& x);
+
 // The total compliance vector α̃ = α/dt² of all constraints.
 Eigen::VectorXd scaled_compliance(const Problem& prob, double dt);
 

@@ -3,6 +3,8 @@
 
 - layers: nothing under core/ includes another project folder; nothing under problems/ includes
   solvers/ or harness/; nothing under solvers/ includes harness/ or a scene header;
+- harness sub-layers: perf/ → cli/ → sim/ → io/ → the parameters (harness/*.hpp): each includes
+  only the sub-layers after it;
 - size: no C++ source or header over 400 lines, no function body over 80 lines.
 
 usage: python3 tests/test_layout.py [--root DIR] [--report]   (--report lists, never fails)
@@ -20,6 +22,11 @@ FORBIDDEN = {
     "core": ["problems/", "solvers/", "harness/"],
     "problems": ["solvers/", "harness/"],
     "solvers": ["harness/", "problems/scenes/", "problems/scene"],
+    # harness sub-layers (perf → cli → sim → io → harness/*): none includes one before it
+    "harness/io": ["harness/sim/", "harness/cli/", "harness/perf/"],
+    "harness/sim": ["harness/cli/", "harness/perf/"],
+    "harness/cli": ["harness/perf/"],
+    "harness/": ["harness/io/", "harness/sim/", "harness/cli/", "harness/perf/"],
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 
@@ -34,7 +41,9 @@ def sources(root):
 
 def layer_violations(root, path):
     rel = os.path.relpath(path, root)
-    top = rel.split(os.sep)[0]
+    parts = rel.split(os.sep)
+    # a layer is a top folder, or for the harness its sub-folder ("harness/" = its own files)
+    layers = [parts[0]] + (["harness/" + (parts[1] if len(parts) > 2 else "")] if parts[0] == "harness" else [])
     out = []
     with open(path, encoding="utf-8") as fh:
         for n, line in enumerate(fh, 1):
@@ -44,9 +53,10 @@ def layer_violations(root, path):
             target = os.path.relpath(os.path.normpath(os.path.join(os.path.dirname(path), m.group(1))), root)
             if not os.path.exists(os.path.join(root, target)):
                 target = m.group(1)  # included relative to the project root
-            for bad in FORBIDDEN.get(top, []):
-                if target.startswith(bad):
-                    out.append(f"{rel}:{n}: includes {m.group(1)} ({top}/ must not include {bad})")
+            for layer in layers:
+                for bad in FORBIDDEN.get(layer, []):
+                    if target.replace(os.sep, "/").startswith(bad):
+                        out.append(f"{rel}:{n}: includes {m.group(1)} ({layer.rstrip('/')}/ must not include {bad})")
     return out
 
 

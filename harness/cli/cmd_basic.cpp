@@ -5,6 +5,7 @@
 #include "outputs.hpp"
 #include "profile.hpp"
 #include "run_setup.hpp"
+#include "../sim/simulation.hpp"
 #include "../io/run_record.hpp"
 #include "../io/mesh_writer.hpp"
 #include "../io/schema.hpp"

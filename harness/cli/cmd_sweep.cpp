@@ -7,6 +7,7 @@
 #include "report.hpp"
 #include "outputs.hpp"
 #include "run_setup.hpp"
+#include "../sim/simulation.hpp"
 #include "../io/run_record.hpp"
 #include "sweep.hpp"
 

@@ -1,6 +1,6 @@
 #include "run_record.hpp"
 
-#include "../sim/reference.hpp"
+#include "../../solvers/linear_solver.hpp"
 
 #include <omp.h>
 #include <unistd.h>
@@ -132,8 +132,8 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["linear_history/offset"] = L.linear_history_offset;
   }
   if (!L.reference_status.empty()) {
-    // The reference of every substep (harness/reference.hpp) and the error against it.
-    r.attrs["reference_method"] = reference_method_description();
+    // The reference of every substep (harness/sim/reference.hpp) and the error against it.
+    r.attrs["reference_method"] = res.reference_method;
     double worst = 0;
     long long unconverged = 0;
     for (size_t i = 0; i < L.reference_status.size(); ++i) {

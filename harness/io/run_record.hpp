@@ -3,8 +3,7 @@
 #pragma once
 
 #include "recorder.hpp"
-
-#include "../sim/stepper.hpp"
+#include "run_result.hpp"
 
 #include "../params.hpp"
 

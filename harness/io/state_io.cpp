@@ -1,6 +1,5 @@
 #include "state_io.hpp"
 
-#include "../cli/run_setup.hpp"
 #include "run_record.hpp"
 #include "atomic_file.hpp"
 #include "h5io.hpp"

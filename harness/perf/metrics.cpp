@@ -15,7 +15,7 @@
 #include "../../problems/scene.hpp"
 #include "../../solvers/linear_solver.hpp"
 #include "../cli/args.hpp"
-#include "../sim/stepper.hpp"
+#include "../sim/simulation.hpp"
 
 #include <mpi.h>
 #include <omp.h>

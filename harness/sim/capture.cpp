@@ -1,6 +1,6 @@
 #include "capture.hpp"
 
-#include "stepper.hpp"
+#include "simulation.hpp"
 
 #include "../../core/error.hpp"
 #include "../../problems/scene.hpp"

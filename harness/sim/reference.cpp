@@ -21,7 +21,6 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p) : prob_(p
 
 ReferenceSolution ReferenceSolver::solve(const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& alpha_tilde) {
   const int m = prob_.num_constraints();
-  const Eigen::VectorXd& w = prob_.particles.w;
   Eigen::Matrix3Xd x = x_pred, dx;
   Eigen::VectorXd lambda = Eigen::VectorXd::Zero(m), b(m), dlambda;
   ConstraintState state;
@@ -72,9 +71,7 @@ ReferenceSolution ReferenceSolver::solve(const Eigen::Matrix3Xd& x_pred, const E
     lambda += dlambda;
     ds_.apply_minv_gradT(state, dlambda, dx);
     x += dx;
-    for (const auto& plane : prob_.planes)
-      for (int p = 0; p < static_cast<int>(x.cols()); ++p)
-        if (w[p] > 0 && x(1, p) < plane.height) x(1, p) = plane.height;
+    project_onto_planes(prob_, x);
   }
   return out;
 }

@@ -32,6 +32,15 @@ LocalMethod::LocalMethod(const Problem& prob, const DualSystem& ds, const XpbdSe
   }
 }
 
+std::map<std::string, double> LocalMethod::statistics() const {
+  switch (kind_) {
+    case LocalKind::gauss_seidel: return {{"colors", coloring_.num_colors}};
+    case LocalKind::jacobi: return {{"jacobi_relaxation_used", relaxation_}};
+    case LocalKind::authors: return {{"authors_skipped_last_sweep", static_cast<double>(skipped_)}};
+  }
+  return {};
+}
+
 void LocalMethod::sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
                         const ConstraintState& state) {
   if (!gs_) {

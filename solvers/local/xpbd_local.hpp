@@ -25,6 +25,9 @@
 #include "../../problems/problem.hpp"
 #include "../coloring.hpp"
 
+#include <map>
+#include <string>
+
 namespace xb {
 
 enum class LocalKind { jacobi, gauss_seidel, authors };
@@ -40,10 +43,9 @@ class LocalMethod {
   // Gauss–Seidel re-evaluates each constraint at the positions of the moment).
   void sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,
              const ConstraintState& state);
-  int num_colors() const { return coloring_.num_colors; }
-  double relaxation() const { return relaxation_; }
-  // xpbd-authors: constraints skipped (C ≤ 1e-6) in the last sweep.
-  long long skipped() const { return skipped_; }
+  // What the run records of this method: colors (xpbd-gs), jacobi_relaxation_used (xpbd-jacobi),
+  // authors_skipped_last_sweep (xpbd-authors: constraints skipped, C ≤ 1e-6, in the last sweep).
+  std::map<std::string, double> statistics() const;
 
  private:
   void jacobi_sweep(Eigen::Matrix3Xd& x, Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_tilde,

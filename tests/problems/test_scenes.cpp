@@ -5,7 +5,7 @@
 #include "harness/io/run_record.hpp"
 #include "harness/io/mesh_writer.hpp"
 #include "harness/sim/stability.hpp"
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "core/error.hpp"
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"

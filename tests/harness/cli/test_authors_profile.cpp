@@ -8,7 +8,7 @@
 #include "harness/sim/line_search.hpp"
 #include "harness/cli/profile.hpp"
 #include "harness/io/state_io.hpp"
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "core/error.hpp"
 #include "problems/scene.hpp"
 #include "test_support.hpp"

@@ -6,7 +6,7 @@
 #include "harness/cli/run_setup.hpp"
 #include "harness/io/run_record.hpp"
 #include "harness/io/recorder.hpp"
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "harness/io/system_io.hpp"
 #include "test_support.hpp"
 #include "core/error.hpp"

@@ -5,7 +5,7 @@
 #include "harness/cli/report.hpp"
 #include "harness/cli/run_setup.hpp"
 #include "harness/io/run_record.hpp"
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "harness/io/system_io.hpp"
 #include "core/error.hpp"
 #include "problems/scene.hpp"

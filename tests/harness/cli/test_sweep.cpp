@@ -5,7 +5,7 @@
 #include "harness/io/run_record.hpp"
 #include "harness/io/recorder.hpp"
 #include "harness/sim/reference.hpp"
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "harness/cli/sweep.hpp"
 #include "core/error.hpp"
 #include "problems/scene.hpp"

@@ -2,7 +2,7 @@
 // formula, and a simulation that records and honours it.
 #include "harness/params.hpp"
 #include "harness/sim/forcing.hpp"
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "problems/scene.hpp"
 
 #include <gtest/gtest.h>

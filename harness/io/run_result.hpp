@@ -1,19 +1,10 @@
-// The stepper: Algorithm 4 of the supplemental, with any method in the inner step.
-//   per substep: v += h·g; x̃ = x + h·v; x = x̃; λ = 0
-//     repeat: C, ∇C at x → dual residual ‖C + α̃λ‖ (logged) → stop? → method step
-//             (local sweep, or A Δλ = b with b = −(C + α̃λ) in the dual or the primal form
-//             (Params::form); λ += Δλ; x += ω M⁻¹∇CᵀΔλ)
-//             → collisions (if the scene has colliders)
-//     v = (x − x_old)/h
-// A failed run is a result (its status), never a crash.
+// What a simulation run returns (harness/sim/simulation.hpp) and a results file records of it
+// (harness/io/run_record.hpp; the schema is results/README.md): the status, the summary and the
+// per-evaluation log. Plain data, so that the files below the simulation can read it.
 #pragma once
 
-#include "../params.hpp"
-#include "../../problems/problem.hpp"
-#include "../../core/sparse.hpp"
-#include "../io/state_io.hpp"
+#include <Eigen/Dense>
 
-#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -51,7 +42,7 @@ struct IterationLog {
   std::vector<double> linear_history_residual, linear_history_time;
   std::vector<long long> linear_history_offset{0};
   // With RunOptions::reference only: per entry ‖x − x_ref‖_M / ‖x_ref − x̃‖_M (x_ref from
-  // harness/reference.hpp, recomputed every substep from the run's own x̃), and per substep
+  // harness/sim/reference.hpp, recomputed every substep from the run's own x̃), and per substep
   // what the reference reached.
   std::vector<double> position_error;
   std::vector<double> reference_relative_dual_residual;
@@ -69,42 +60,11 @@ struct RunResult {
   double relative_dual_residual = 0;
   double wall_time = 0;             // s, the whole run (without the reference's time)
   double reference_time = 0;        // s spent on references and errors (excluded from every clock)
+  std::string reference_method;     // how the reference was computed ("" = no reference)
   int substeps_converged = 0, substeps_total = 0;
   std::map<std::string, double> stats;                     // solver statistics (+ run extras)
   std::map<std::string, std::vector<double>> arrays;       // per-level and similar arrays
   Eigen::Matrix3Xd final_positions;
 };
-
-// One global outer iteration's linear step, as `capture` sees it: the dual system (A is filled
-// in either form) and what the primal form is built from.
-struct SystemView {
-  int frame, substep, iteration;
-  const SparseMatrix& A;
-  const Vector& b;
-  const ConstraintState& state;
-  const Eigen::VectorXd& alpha_tilde;
-  const Eigen::Matrix3Xd& x;
-};
-
-struct RunOptions {
-  double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
-  // Solve every substep also by the reference method (harness/reference.hpp) and log the
-  // position error per outer iteration. Its time is excluded from wall_time and time_budget.
-  bool reference = false;
-  // Called with the system of every global outer iteration before it is solved; returning true
-  // ends the run (used by `capture`).
-  std::function<bool(const SystemView&)> on_system;
-  // Called after every frame with the positions (for mesh output).
-  std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
-  // Called after every frame with the state the next frame starts from (for --save-state).
-  std::function<void(const SimState&)> on_state;
-  // Start from this state (positions, velocities; frames numbered from its frame) instead of
-  // the scene's start. Its particle count must match the problem's.
-  const SimState* initial_state = nullptr;
-};
-
-// Runs `method` (a name from methods()) on a copy of `prob`. Never throws for a numerical
-// failure; throws xb::Error for a bad method name.
-RunResult run_simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt = {});
 
 }  // namespace xb

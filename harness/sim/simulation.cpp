@@ -1,11 +1,11 @@
-#include "stepper.hpp"
-
-#include "stability.hpp"
+#include "simulation.hpp"
 
 #include "forcing.hpp"
 #include "line_search.hpp"
 #include "primal_solve.hpp"
 #include "reference.hpp"
+#include "residual_energy.hpp"
+#include "stability.hpp"
 
 #include "../../problems/dual_system.hpp"
 #include "../../core/error.hpp"
@@ -26,36 +26,6 @@ namespace {
 
 // Runaway: the dual residual grew this much over the substep's first one.
 constexpr double divergence_factor = 1e8;
-
-double primal_residual(const Problem& prob, const DualSystem& ds, const ConstraintState& s, const Eigen::Matrix3Xd& x,
-                       const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& lambda, Eigen::Matrix3Xd& work) {
-  ds.apply_gradT(s, lambda, work);
-  const Eigen::VectorXd& w = prob.particles.w;
-  double sum = 0;
-#pragma omp parallel for reduction(+ : sum) schedule(static)
-  for (int p = 0; p < static_cast<int>(x.cols()); ++p)
-    if (w[p] > 0) sum += ((x.col(p) - x_pred.col(p)) / w[p] - work.col(p)).squaredNorm();
-  return std::sqrt(sum);
-}
-
-double incremental_energy(const Problem& prob, const ConstraintState& s, const Eigen::Matrix3Xd& x,
-                          const Eigen::Matrix3Xd& x_pred, double h) {
-  const Eigen::VectorXd& w = prob.particles.w;
-  double kin = 0, pot = 0;
-  for (int p = 0; p < static_cast<int>(x.cols()); ++p)
-    if (w[p] > 0) kin += (x.col(p) - x_pred.col(p)).squaredNorm() / w[p];
-  for (int j = 0; j < prob.num_constraints(); ++j) {
-    const double a = prob.compliance(j);
-    if (a > 0) pot += s.C[j] * s.C[j] / a;
-  }
-  return kin / (2 * h * h) + pot / 2;
-}
-
-void project_colliders(const Problem& prob, Eigen::Matrix3Xd& x) {
-  for (const auto& plane : prob.planes)
-    for (int p = 0; p < static_cast<int>(x.cols()); ++p)
-      if (prob.particles.w[p] > 0 && x(1, p) < plane.height) x(1, p) = plane.height;
-}
 
 // One run: the method, its state and the log. Algorithm 4 is run() → substep() → the outer loop;
 // what is logged per evaluation is in log_state(), the method step in step().
@@ -128,6 +98,7 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
   if (opt.reference) {
     Timer ref_clock;
     reference_.emplace(prob_, p);
+    res_.reference_method = reference_method_description();
     res_.reference_time += ref_clock.seconds();
   }
   if (find_method(method)->local) {
@@ -225,7 +196,7 @@ void Simulation::substep(int frame, int sub) {
     if (over_budget(excluded_)) break;
     Timer step_clock;
     if (!step(frame, sub, it, stop_metric, last)) break;
-    project_colliders(prob_, P.x);
+    project_onto_planes(prob_, P.x);
     last.time = step_clock.seconds();
     ++res_.outer_iterations;
   }
@@ -235,7 +206,7 @@ void Simulation::substep(int frame, int sub) {
     ++res_.substeps_converged;
   else
     any_max_iterations_ = true;
-  project_colliders(prob_, P.x);
+  project_onto_planes(prob_, P.x);
   P.v = (P.x - x_old_) / h_;
   if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
 }
@@ -359,9 +330,8 @@ void Simulation::finish() {
     res_.stats = active_->statistics();
     res_.arrays = active_->array_statistics();
   }
-  if (local_ && method_ == "xpbd-gs") res_.stats["colors"] = local_->num_colors();
-  if (local_ && method_ == "xpbd-jacobi") res_.stats["jacobi_relaxation_used"] = local_->relaxation();
-  if (local_ && method_ == "xpbd-authors") res_.stats["authors_skipped_last_sweep"] = static_cast<double>(local_->skipped());
+  if (local_)
+    for (const auto& [key, value] : local_->statistics()) res_.stats[key] = value;
   // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
   // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
   if (stability_.has_tets()) res_.arrays["inverted_tets"] = stability_.inverted_tets();

@@ -1,5 +1,5 @@
 // The stepper and the baseline methods on cases with known answers.
-#include "harness/sim/stepper.hpp"
+#include "harness/sim/simulation.hpp"
 #include "problems/dual_system.hpp"
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"
