@@ -36,6 +36,11 @@ def run_file(out, scene, size, method, form, forcing):
     return os.path.join(out, "data", scene, safe, f"{method}.{form}.{forcing}.h5")
 
 
+def part_of(path):
+    """Where a run is written until it has finished (a .h5 name, as `run --out` wants)."""
+    return path[:-3] + ".part.h5"
+
+
 def sets_of(*tables):
     out = {}
     for t in tables:
@@ -54,47 +59,56 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
     """Runs one race entry into `path` (skipped if it exists). Returns the run's dict or None."""
     if not os.path.exists(path):
         cmd = [bench, "run", "--scene", scene, "--solver", solver, "--time-budget", f"{budget:g}",
-               *(["--form", form] if form != "none" else []), *set_args(sets), "--out", path + ".part"]
+               *(["--form", form] if form != "none" else []), *set_args(sets), "--out", part_of(path)]
         print("race:", " ".join(cmd), flush=True)
         if dry_run:
             return None
         os.makedirs(os.path.dirname(path), exist_ok=True)
-        if os.path.exists(path + ".part"):
-            os.remove(path + ".part")
+        if os.path.exists(part_of(path)):
+            os.remove(part_of(path))
         t0 = time.time()
         done = subprocess.run(cmd, stdout=subprocess.DEVNULL)
-        if done.returncode != 0 or not os.path.exists(path + ".part"):
+        if done.returncode != 0 or not os.path.exists(part_of(path)):
             print(f"race: exit {done.returncode}; nothing recorded for {path}", file=sys.stderr)
             return None
-        os.replace(path + ".part", path)
+        os.replace(part_of(path), path)
         print(f"race: {time.time() - t0:.1f} s", flush=True)
     runs = xbruns.load(path, datasets=race_plots.DATASETS)
     return runs[-1] if runs else None
 
 
-def choose_form(args, spec, scene_name, scene, size, method, m):
+def budget(spec, exact_time):
+    """A run's time budget: the spec's, and at most budget_factor × exact CHOLMOD's frame."""
+    if exact_time is None:
+        return spec["time_budget"]
+    return min(spec["time_budget"], max(10.0, spec.get("budget_factor", 4) * exact_time))
+
+
+def choose_form(args, spec, scene_name, scene, size, method, m, exact_time):
     """The form of `method` for this scene: both forms at the smallest size, the faster per outer
-    iteration (fixed forcing)."""
-    timing = {}
+    iteration (fixed forcing). Returns (form, exact CHOLMOD's frame time if this was cholmod)."""
+    timing, walls = {}, {}
     for form in ("dual", "primal"):
         sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"linear.forcing": "fixed"})
         path = run_file(args.out, scene_name, size["label"], method, form, "fixed")
-        r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, spec["time_budget"], args.dry_run)
+        r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact_time), args.dry_run)
         if r is not None and r["attrs"].get("status") in ("ok", "max_iterations") and r["attrs"]["outer_iterations"] > 0:
             timing[form] = float(r["attrs"]["wall_time"]) / float(r["attrs"]["outer_iterations"])
-    if not timing:
-        return "primal"
-    return min(timing, key=timing.get)
+            walls[form] = float(r["attrs"]["wall_time"])
+    form = min(timing, key=timing.get) if timing else "primal"
+    return form, walls.get(form)
 
 
 def run_scene(args, spec, scene_name, scene):
     sizes = scene["sizes"]
     chosen = [int(i) for i in args.sizes.split(",")] if args.sizes else range(len(sizes))
     methods = {k: v for k, v in spec["methods"].items() if not args.methods or k in args.methods.split(",")}
-    forms = {}
+    forms, exact_time = {}, None
     for name, m in methods.items():
         if not m.get("local"):
-            forms[name] = choose_form(args, spec, scene_name, scene, sizes[0], name, m)
+            forms[name], wall = choose_form(args, spec, scene_name, scene, sizes[0], name, m, exact_time)
+            if name == "cholmod":
+                exact_time = wall
     print(f"race: {scene_name} forms: " + ", ".join(f"{k} {v}" for k, v in forms.items()), flush=True)
     for i in chosen:
         size = sizes[i]
@@ -105,17 +119,17 @@ def run_scene(args, spec, scene_name, scene):
             for forcing in (spec["forcing"] if m.get("forcing", True) else ["fixed"]):
                 sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"linear.forcing": forcing})
                 path = run_file(args.out, scene_name, size["label"], name, forms[name], forcing)
-                r = run_one(args.bench, path, scene["scene"], m["solver"], forms[name], sets, spec["time_budget"],
-                            args.dry_run)
+                r = run_one(args.bench, path, scene["scene"], m["solver"], forms[name], sets,
+                            budget(spec, None if name == "cholmod" else exact_time), args.dry_run)
                 if name == "cholmod" and r is not None:
                     exact_time = float(r["attrs"]["wall_time"])
         for name, m in methods.items():
             if not m.get("local"):
                 continue
-            budget = exact_time if exact_time else spec["time_budget"]
             sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"max_iterations": LOCAL_MAX_ITERATIONS})
             path = run_file(args.out, scene_name, size["label"], name, "none", "none")
-            run_one(args.bench, path, scene["scene"], m["solver"], "none", sets, budget, args.dry_run)
+            run_one(args.bench, path, scene["scene"], m["solver"], "none", sets,
+                    exact_time if exact_time else spec["time_budget"], args.dry_run)
     return forms
 
 

@@ -41,7 +41,7 @@ def load_entries(data_dir):
         for size in sorted(os.listdir(os.path.join(data_dir, scene))):
             folder = os.path.join(data_dir, scene, size)
             for f in sorted(os.listdir(folder)):
-                if not f.endswith(".h5"):
+                if not f.endswith(".h5") or f.endswith(".part.h5"):  # .part.h5: a run still going
                     continue
                 method, form, forcing = f[:-3].rsplit(".", 2)
                 runs = xbruns.load(os.path.join(folder, f), datasets=DATASETS)

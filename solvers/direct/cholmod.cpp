@@ -57,7 +57,9 @@ class CholmodSolver final : public LinearSolver {
     view_.packed = 1;
     if (kind == SetupKind::Structure || !L_) {
       if (L_) cholmod_free_factor(&L_, &c_);
+      Timer ta;
       L_ = cholmod_analyze(&view_, &c_);
+      analyse_time_ += ta.seconds();
       factorise("analyse+factorise");
     } else if (lagged_ && factor_ok_ && ctx.frame == factor_frame_) {
       fresh_ = false;  // keep the factor of an earlier matrix
@@ -95,6 +97,7 @@ class CholmodSolver final : public LinearSolver {
     }
     s["factorisations"] = factorisations_;
     s["factorise_time_total"] = factorise_time_;
+    s["analyse_time_total"] = analyse_time_;
     if (lagged_) {
       s["lagged_setups"] = lagged_setups_;
       s["refactorisations_in_solve"] = refactors_in_solve_;
@@ -231,7 +234,7 @@ class CholmodSolver final : public LinearSolver {
   bool factor_ok_ = false, fresh_ = false;
   int factor_frame_ = -1;
   std::string message_, action_;
-  double setup_time_ = 0, factorise_time_ = 0;
+  double setup_time_ = 0, analyse_time_ = 0, factorise_time_ = 0;
   int factorisations_ = 0, lagged_setups_ = 0, refactors_in_solve_ = 0;
 };
 }  // namespace
