@@ -13,7 +13,7 @@ SettingTable<SolverSettings> make_table() {
       setting("linear.max_iterations", "linear solve iteration limit", &LinearSettings::max_iterations, 1, 1e9),
   };
   append_part(t, linear, [](S& s) -> LinearSettings& { return s.linear; });
-  append_part(t, amg_settings(), [](S& s) -> AmgSettings& { return s.amg; });
+  append_part(t, amg_settings(), [](S& s) -> amg::AmgOptions& { return s.amg; });
   append_part(t, hypre_settings(), [](S& s) -> HypreSettings& { return s.hypre; });
   append_part(t, muelu_settings(), [](S& s) -> MueluSettings& { return s.muelu; });
   append_part(t, xpbd_settings(), [](S& s) -> XpbdSettings& { return s.xpbd; });
