@@ -121,7 +121,7 @@ void amg_rows(Table& t, const std::string& form, const SparseMatrix& A, const Ve
   for (const char* precision : {"double", "single"}) {
     p.amg.precision = precision;
     const std::string tag = std::string(" (") + precision + ")";
-    amg::AmgOptions opt = amg::AmgOptions::from_settings(p);
+    amg::AmgOptions opt = p.amg;
     amg::Hierarchy h;
     const double setup_ms = least_ms([&] { h.setup(A, opt, info); }, budget);
     const double refresh_ms = least_ms([&] { h.refresh(A); }, budget);
@@ -265,9 +265,9 @@ void smoother_table(const CapturedSystem& cs, const Params& p, const std::string
     }
     for (const auto& [kind, sweeps, degree] : variants) {
       Params q = p;
-      q.amg.smoother = kind;
-      q.amg.smoother_sweeps = sweeps;
-      q.amg.chebyshev_degree = degree;  // 0 (not a Chebyshev kind): auto, unused
+      q.amg.smoother.kind = kind;
+      q.amg.smoother.sweeps = sweeps;
+      q.amg.smoother.degree = degree;  // 0 (not a Chebyshev kind): auto, unused
       const std::string deg = degree ? std::to_string(degree) : "-";
       double setup = 0, solve = 0, rel = NAN;
       int its = 0;

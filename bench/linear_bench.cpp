@@ -134,7 +134,7 @@ void BM_mgpbd_refresh(benchmark::State& st) {
 #ifdef XB_BENCH_HAVE_AMG
 void BM_mgpbd_vcycle(benchmark::State& st) {
   xb::amg::Hierarchy h;
-  h.setup(sys->A, xb::amg::AmgOptions::from_settings(sys->p));
+  h.setup(sys->A, sys->p.amg);
   xb::Vector x;
   for (auto _ : st) {
     h.vcycle(sys->b, x);

@@ -186,7 +186,7 @@ void bm_smoother(benchmark::State& st, std::string kind, SceneCase c) {
 void bm_vcycle(benchmark::State& st, SceneCase c) {
   Case& k = get_case(c);
   xb::amg::Hierarchy h;
-  h.setup(k.sys.A, xb::amg::AmgOptions::from_settings(k.p));
+  h.setup(k.sys.A, k.p.amg);
   xb::Vector x;
   for (auto _ : st) {
     h.vcycle(k.sys.b, x);
@@ -199,7 +199,7 @@ void bm_vcycle(benchmark::State& st, SceneCase c) {
 void bm_amg_setup(benchmark::State& st, SceneCase c, bool refresh) {
   Case& k = get_case(c);
   xb::amg::Hierarchy h;
-  const auto opt = xb::amg::AmgOptions::from_settings(k.p);
+  const auto opt = k.p.amg;
   h.setup(k.sys.A, opt);
   for (auto _ : st) {
     if (refresh)

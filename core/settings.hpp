@@ -87,6 +87,14 @@ void set_setting(const SettingTable<S>& table, S& s, const std::string& key, con
   }
   set_setting_text(f->ref(s), f->type, f->key, f->min, f->max, f->choices, value, where);
 }
+// Checks the values of s, filled in code rather than from text, against the table as if each had
+// been set from its text: the same bounds, choices and messages.
+template <class S>
+void check_settings(const SettingTable<S>& table, const S& s, const std::string& where) {
+  S scratch = s;
+  for (const auto& f : table)
+    set_setting_text(f.ref(scratch), f.type, f.key, f.min, f.max, f.choices, setting_text(f.ref(scratch)), where);
+}
 // Reads go through the same accessors; they never write.
 template <class S>
 std::string setting_text(const SettingField<S>& f, const S& s) { return setting_text(f.ref(const_cast<S&>(s))); }

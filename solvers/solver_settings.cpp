@@ -18,7 +18,7 @@ SettingTable<SolverSettings> make_table() {
       setting("linear.stop_norm", "norm of the linear stop test: dual (|J M^-1 r_K| in the primal form) | primal (the solved system's |r|_2) | energy (preconditioned norm sqrt(r'M^-1 r))", &LinearSettings::stop_norm, {"dual", "primal", "energy"}),
   };
   append_part(t, linear, [](S& s) -> LinearSettings& { return s.linear; });
-  append_part(t, amg_settings(), [](S& s) -> AmgSettings& { return s.amg; });
+  append_part(t, amg_settings(), [](S& s) -> amg::AmgOptions& { return s.amg; });
   append_part(t, cholmod_settings(), [](S& s) -> CholmodSettings& { return s.cholmod; });
   append_part(t, hypre_settings(), [](S& s) -> HypreSettings& { return s.hypre; });
   append_part(t, muelu_settings(), [](S& s) -> MueluSettings& { return s.muelu; });

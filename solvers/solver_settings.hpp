@@ -27,7 +27,7 @@ struct LinearSettings {
 struct SolverSettings {
   int seed = 1;  // random starts of near-kernel candidates and λ_max estimates
   LinearSettings linear;
-  AmgSettings amg;
+  amg::AmgOptions amg;
   CholmodSettings cholmod;
   HypreSettings hypre;
   MueluSettings muelu;

@@ -1,25 +1,37 @@
 #include "amg_settings.hpp"
 
+#include "../../core/error.hpp"
+
 namespace xb {
 
-const SettingTable<AmgSettings>& amg_settings() {
-  using S = AmgSettings;
+namespace {
+// A row of a part's table (the smoother's, the near kernel's) as a row of AmgOptions'.
+template <class Part>
+SettingField<amg::AmgOptions> in_part(Part amg::AmgOptions::*part, SettingField<Part> f) {
+  return {f.key, f.type, f.doc, [r = f.ref, part](amg::AmgOptions& o) { return r(o.*part); }, f.min, f.max, f.choices};
+}
+}  // namespace
+
+const SettingTable<amg::AmgOptions>& amg_settings() {
+  using S = amg::AmgOptions;
+  using NK = amg::NearKernelOptions;
+  using SM = amg::SmootherOptions;
   static const SettingTable<S> table = {
       setting("amg.strength_threshold", "theta_s: keep |Aij| >= theta sqrt(|Aii Ajj|)", &S::strength_threshold, 0, 1),
       setting("amg.aggregation", "aggregation rule", &S::aggregation, {"standard"}),
-      setting("amg.near_kernel", "near-kernel candidates: auto (ones dual, rigid primal) | ones | gs | gs_authors (6 vectors of 30 sequential forward GS sweeps from U[0,1) max|A|, smoothed P under prolongator=auto) | rigid (6 rigid-body modes, primal form only)", &S::near_kernel, {"auto", "ones", "gs", "gs_authors", "rigid"}),
-      setting("amg.near_kernel_sweeps", "Gauss-Seidel sweeps on Ax=0 for near_kernel=gs", &S::near_kernel_sweeps, 0, 1e6),
-      setting("amg.near_kernel_vectors", "number of gs candidate vectors", &S::near_kernel_vectors, 1, 64),
-      setting("amg.near_kernel_extra", "near_kernel=rigid: this many relaxed random vectors (near_kernel_sweeps GS sweeps on Ax=0 each) appended to the 6 rigid modes", &S::near_kernel_extra, 0, 64),
+      in_part(&S::near_kernel, setting("amg.near_kernel", "near-kernel candidates: auto (ones dual, rigid primal) | ones | gs | gs_authors (6 vectors of 30 sequential forward GS sweeps from U[0,1) max|A|, smoothed P under prolongator=auto) | rigid (6 rigid-body modes, primal form only)", &NK::kind, {"auto", "ones", "gs", "gs_authors", "rigid"})),
+      in_part(&S::near_kernel, setting("amg.near_kernel_sweeps", "Gauss-Seidel sweeps on Ax=0 for near_kernel=gs", &NK::sweeps, 0, 1e6)),
+      in_part(&S::near_kernel, setting("amg.near_kernel_vectors", "number of gs candidate vectors", &NK::vectors, 1, 64)),
+      in_part(&S::near_kernel, setting("amg.near_kernel_extra", "near_kernel=rigid: this many relaxed random vectors (near_kernel_sweeps GS sweeps on Ax=0 each) appended to the 6 rigid modes", &NK::extra, 0, 64)),
       setting("amg.prolongator", "auto (tentative dual, smoothed primal) | tentative | smoothed: P = (I - omega D^-1 A) T, omega = 4/(3 lambda_max(D^-1 A))", &S::prolongator, {"auto", "tentative", "smoothed"}),
       setting("amg.nodal_strength_threshold", "theta of nodal coarsening on level 0 (block systems: primal form), on block Frobenius norms", &S::nodal_strength_threshold, 0, 1),
       setting("amg.coarse_nodal_strength_threshold", "theta of nodal coarsening on levels >= 1 (< 0: amg.nodal_strength_threshold)", &S::coarse_nodal_strength_threshold, -1, 1),
       setting("amg.min_coarsening", "block systems: a nodal aggregation with fewer nodes per aggregate than this is redone with every coupling (theta 0) on levels >= 1, then, if still below, its aggregates are aggregated again, so smoothed-P Galerkin operators do not fill in (0 = never)", &S::min_coarsening, 0, 1e6),
       setting("amg.drop_tolerance", "block systems, level 0: node blocks with |A_IJ|_F < tol sqrt(|A_II|_F |A_JJ|_F) (numerically zero couplings of the mesh pattern) are dropped from the hierarchy's copy, their norms added to the diagonal so it stays SPD (0 = keep all)", &S::drop_tolerance, 0, 1),
       setting("amg.prolongator_diagonal", "D of the smoothed prolongator: block (the node blocks: the block smoothers' D, whose lambda_max is then reused; on a scalar system the diagonal) | scalar (A's diagonal)", &S::prolongator_diagonal, {"scalar", "block"}),
-      setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &S::smoother, {"auto", "jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"}),
-      setting("amg.smoother_sweeps", "pre- and post-smoothing sweeps (0 = auto: 1)", &S::smoother_sweeps, 0, 100),
-      setting("amg.chebyshev_degree", "degree of the chebyshev and block_chebyshev polynomials: passes over the level's matrix per sweep (0 = auto: 3 dual, the authors'; 4 primal)", &S::chebyshev_degree, 0, 20),
+      in_part(&S::smoother, setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &SM::kind, {"auto", "jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"})),
+      in_part(&S::smoother, setting("amg.smoother_sweeps", "pre- and post-smoothing sweeps (0 = auto: 1)", &SM::sweeps, 0, 100)),
+      in_part(&S::smoother, setting("amg.chebyshev_degree", "degree of the chebyshev and block_chebyshev polynomials: passes over the level's matrix per sweep (0 = auto: 3 dual, the authors'; 4 primal)", &SM::degree, 0, 20)),
       setting("amg.coarse_solver", "coarsest level: direct (Cholesky) | smoother (the level's smoother sweeps from zero, the authors')", &S::coarse_solver, {"direct", "smoother"}),
       setting("amg.jacobi_omega", "lambda_max(D^-1 A) of jacobi/chebyshev smoothers: per_level (each level's own) | level0 (level 0's on every level, the authors')", &S::jacobi_omega, {"per_level", "level0"}),
       setting("amg.setup_interval", "frames between rebuilds of aggregates and P", &S::setup_interval, 1, 1e9),
@@ -31,3 +43,27 @@ const SettingTable<AmgSettings>& amg_settings() {
 }
 
 }  // namespace xb
+
+namespace xb::amg {
+
+AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
+  check_settings(amg_settings(), opt, "mgpbd");
+  if (info.block_size < 1) throw Error("mgpbd: block size must be >= 1");
+  AmgOptions o = opt;
+  const bool block = info.block_size > 1;
+  if (o.near_kernel.kind == "auto") o.near_kernel.kind = block && info.near_kernel ? "rigid" : "ones";
+  if (o.near_kernel.kind == "rigid" && !info.near_kernel)
+    throw Error("amg.near_kernel=rigid needs the rigid-body modes of the primal form (form=primal); this system has none");
+  if (o.prolongator == "auto") o.prolongator = block || o.near_kernel.kind == "gs_authors" ? "smoothed" : "tentative";
+  if (o.smoother.kind == "auto") o.smoother.kind = block ? kBlockSmoother : "chebyshev";
+  if (o.jacobi_omega == "level0" && o.smoother.kind != "jacobi" && o.smoother.kind != "chebyshev")
+    throw Error("amg.jacobi_omega=level0 needs amg.smoother jacobi or chebyshev (the smoother is " + o.smoother.kind + ")");
+  if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
+  if (o.smoother.degree == 0) o.smoother.degree = block ? kBlockChebyshevDegree : 3;
+  if (o.precision == "single" && (o.smoother.kind == "gs" || o.smoother.kind == "block_gs"))
+    throw Error("amg.precision=single runs the polynomial smoothers (jacobi, chebyshev, block_jacobi, block_chebyshev), not amg.smoother=" +
+                o.smoother.kind);
+  return o;
+}
+
+}  // namespace xb::amg

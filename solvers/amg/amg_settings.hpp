@@ -1,37 +1,89 @@
-// The in-house AMG's settings (mgpbd): the amg.* keys. amg.setup_interval also paces the lazy
-// setup of hypre and MueLu (solvers/setup_policy.hpp).
+// The in-house AMG's settings (mgpbd): one struct, AmgOptions, with the amg.* keys' defaults, read
+// by the hierarchy and its parts as they are (the smoother and near-kernel parts are their own
+// option structs, pointed at by the same table). amg.setup_interval also paces the lazy setup of
+// hypre and MueLu (solvers/setup_policy.hpp).
+// resolve_options turns the "auto" and 0 (= auto) values into what they mean for a matrix; the
+// hierarchy does that once per setup (Hierarchy::configure).
 #pragma once
 
 #include "../../core/settings.hpp"
+#include "near_kernel.hpp"
+#include "relaxation/smoothers.hpp"
 
+#include <Eigen/Dense>
 #include <string>
 
-namespace xb {
+namespace xb::amg {
 
-struct AmgSettings {
-  double strength_threshold = 0.25;
+struct AmgOptions {
+  double strength_threshold = 0.25;   // θ_s of scalar (dual) coarsening
   std::string aggregation = "standard";
-  std::string near_kernel = "auto";  // auto (ones dual, rigid primal) | ones | gs | gs_authors | rigid
-  std::string coarse_solver = "direct";   // direct (Cholesky) | smoother (the level's smoother from zero)
-  std::string jacobi_omega = "per_level";  // per_level | level0 (lambda_max of level 0 on every level)
-  int near_kernel_sweeps = 20;
-  int near_kernel_vectors = 1;
-  int near_kernel_extra = 0;  // rigid: relaxed random vectors appended to the rigid modes
-  std::string prolongator = "auto";  // auto (tentative dual, smoothed primal) | tentative | smoothed
-  double nodal_strength_threshold = 0.0;         // block systems (primal K), level 0
-  double coarse_nodal_strength_threshold = 0.1;  // levels >= 1 (< 0: the level-0 value)
-  double min_coarsening = 4;  // fewer nodes per aggregate than this → redone at theta 0 (levels >= 1), then merged
-  double drop_tolerance = 1e-10;  // block level 0: relative size of a node block treated as zero
-  std::string prolongator_diagonal = "block";    // D of the smoothed P: block | scalar
-  std::string smoother = "auto";  // auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs | block_jacobi | block_chebyshev
-  int smoother_sweeps = 0;        // 0: auto (1)
-  int chebyshev_degree = 0;       // 0: auto (3 dual, the authors'; 4 primal)
-  int setup_interval = 20;        // frames between rebuilds of aggregates and P
+  // kind auto: rigid on a block system with a basis, else ones. The seed is SolverSettings::seed.
+  NearKernelOptions near_kernel{.kind = "auto"};
+  std::string prolongator = "auto";   // auto (smoothed on block systems or gs_authors, else tentative) | tentative | smoothed
+  // θ_s of nodal coarsening (block systems, on block Frobenius norms). 0 keeps every coupling, as
+  // pyamg's smoothed aggregation does by default: 0.25 isolates half the cloth's particles (an
+  // off-diagonal block of K is about a quarter of its diagonal block there) and shrinks the bar's
+  // aggregates to ~4 particles (operator complexity 7.7).
+  double nodal_strength_threshold = 0.0;
+  // θ_s of nodal coarsening on levels ≥ 1 (< 0: nodal_strength_threshold). Galerkin operators of
+  // a smoothed P couple neighbours of neighbours, so θ = 0 there merges ~25 aggregates into one
+  // (squash bunny:12k: 924 → 36 rows, 54 PCG iterations); 0.1 gives 924 → 156 and 36 iterations.
+  double coarse_nodal_strength_threshold = 0.1;
+  // A nodal aggregation with fewer than this many nodes per aggregate coarsens too slowly: a
+  // smoothed P then fills the next operator in. On levels ≥ 1 it is first redone at θ = 0 (the
+  // stretched bar, bar_hang r16, went 792 → 286 nodes at θ = 0.1, its level 2 43% dense); if it
+  // is still below (on any level: couplings along lines only, as the filtered bar's), its
+  // aggregates are aggregated again on the graph of their couplings until it is not. 0 = never.
+  double min_coarsening = 4;
+  // Block systems, level 0: node blocks below this fraction of their diagonals' geometric mean
+  // are dropped, their norms lumped onto the diagonal (zero_filter.hpp). Round-off zeros are
+  // ≤ 1e-14 there (bar_hang); the smallest real coupling on the captured systems is 3e-6 (squash
+  // bunny:50k). 0 = keep every block.
+  double drop_tolerance = 1e-10;
+  // D of the smoothed P: block | scalar. Block (a scalar layout's blocks are its diagonal): the
+  // same or fewer iterations than the scalar D on the captured primal systems (squash 29 against
+  // 31), and the block smoother's λ_max(D⁻¹A) serves P too (one Lanczos per level, not two).
+  std::string prolongator_diagonal = "block";
+  // kind auto: kBlockSmoother on a block system, else chebyshev; sweeps 0: kBlockSmootherSweeps
+  // on a block system, else 1; degree 0: kBlockChebyshevDegree on a block system, else 3.
+  SmootherOptions smoother{.kind = "auto", .sweeps = 0, .degree = 0};
+  int setup_interval = 20;            // frames between rebuilds of aggregates and P (SetupPolicy)
   int max_coarse = 400;
   int max_levels = 10;
-  std::string precision = "double";  // storage of the V-cycle: double | single (float matrices and vectors; CG stays double)
+  std::string coarse_solver = "direct";    // direct (Cholesky) | smoother (the level's smoother from zero)
+  std::string jacobi_omega = "per_level";  // per_level | level0 (level 0's λ_max(D⁻¹A) on every level)
+  // Storage of the V-cycle: "double", or "single" (float copies of every level's A, P, R and of
+  // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
+  std::string precision = "double";
 };
 
-const SettingTable<AmgSettings>& amg_settings();
+// What amg.smoother = auto, amg.smoother_sweeps = 0 and amg.chebyshev_degree = 0 take on block
+// systems (the primal form): one sweep of a degree-4 Chebyshev in D_block⁻¹A. Per decade of
+// residual it is cheaper than degree 3 × 2 on every captured system (docs/kernels.md, "Smoother
+// cost per digit": four passes before and after instead of six, for 0–30% more iterations);
+// degree 3 × 1 is cheaper still but leaves the stretched bar above a fifth of dual jacobi-pcg's
+// iterations. Block Gauss–Seidel costs about twice as much per decade there.
+inline constexpr const char* kBlockSmoother = "block_chebyshev";
+inline constexpr int kBlockSmootherSweeps = 1;
+inline constexpr int kBlockChebyshevDegree = 4;
 
+// What the caller knows about the matrix beyond its entries (SetupContext's fields).
+struct MatrixInfo {
+  int block_size = 1;                          // unknowns per node, node-major
+  const Eigen::MatrixXd* near_kernel = nullptr;  // n × k basis (rigid-body modes), setup only
+};
+
+// The options with "auto" resolved for this matrix (near_kernel = gs_authors makes an auto
+// prolongator smoothed, as the authors hand their candidates to smoothed aggregation). Throws
+// xb::Error for a value the amg.* table refuses (its choices and bounds, its message), for
+// near_kernel = rigid without a basis, jacobi_omega = level0 with a smoother other than jacobi or
+// chebyshev, and precision = single with a Gauss–Seidel smoother.
+AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info);
+
+}  // namespace xb::amg
+
+namespace xb {
+// The amg.* keys, each pointing at its member of AmgOptions.
+const SettingTable<amg::AmgOptions>& amg_settings();
 }  // namespace xb

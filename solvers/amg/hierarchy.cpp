@@ -1,87 +1,20 @@
 #include "hierarchy.hpp"
 
 #include "../../core/error.hpp"
-#include "../solver_settings.hpp"
 #include "strength.hpp"
 
 #include <algorithm>
 
 namespace xb::amg {
 
-AmgOptions AmgOptions::from_settings(const SolverSettings& p) {
-  AmgOptions o;
-  o.strength_threshold = p.amg.strength_threshold;
-  o.aggregation = p.amg.aggregation;
-  o.near_kernel.kind = p.amg.near_kernel;
-  o.near_kernel.sweeps = p.amg.near_kernel_sweeps;
-  o.near_kernel.vectors = p.amg.near_kernel_vectors;
-  o.near_kernel.extra = p.amg.near_kernel_extra;
-  o.near_kernel.seed = static_cast<unsigned>(p.seed);
-  o.prolongator = p.amg.prolongator;
-  o.nodal_strength_threshold = p.amg.nodal_strength_threshold;
-  o.coarse_nodal_strength_threshold = p.amg.coarse_nodal_strength_threshold;
-  o.min_coarsening = p.amg.min_coarsening;
-  o.drop_tolerance = p.amg.drop_tolerance;
-  o.prolongator_diagonal = p.amg.prolongator_diagonal == "block" ? JacobiDiagonal::Block : JacobiDiagonal::Scalar;
-  o.smoother.kind = p.amg.smoother;
-  o.smoother.sweeps = p.amg.smoother_sweeps;
-  o.smoother.degree = p.amg.chebyshev_degree;
-  o.smoother.seed = static_cast<unsigned>(p.seed);
-  o.max_coarse = p.amg.max_coarse;
-  o.max_levels = p.amg.max_levels;
-  o.coarse_solver = p.amg.coarse_solver;
-  o.jacobi_omega = p.amg.jacobi_omega;
-  o.precision = p.amg.precision;
-  return o;
-}
-
-void check_option_names(const AmgOptions& opt) {
-  aggregation_rule(opt.aggregation);
-  const std::string& nk = opt.near_kernel.kind;
-  if (nk != "auto" && nk != "ones" && nk != "gs" && nk != "gs_authors" && nk != "rigid")
-    throw Error("amg.near_kernel: unknown kind '" + nk + "' (valid: auto, ones, gs, gs_authors, rigid)");
-  if (opt.coarse_solver != "direct" && opt.coarse_solver != "smoother")
-    throw Error("amg.coarse_solver: unknown solver '" + opt.coarse_solver + "' (valid: direct, smoother)");
-  if (opt.jacobi_omega != "per_level" && opt.jacobi_omega != "level0")
-    throw Error("amg.jacobi_omega: unknown rule '" + opt.jacobi_omega + "' (valid: per_level, level0)");
-  if (opt.prolongator != "auto" && opt.prolongator != "tentative" && opt.prolongator != "smoothed")
-    throw Error("amg.prolongator: unknown kind '" + opt.prolongator + "' (valid: auto, tentative, smoothed)");
-  const std::string& sm = opt.smoother.kind;
-  const std::string kinds = std::string(", ") + kSmootherKinds + ",";
-  if (sm != "auto" && (sm.empty() || kinds.find(", " + sm + ",") == std::string::npos))
-    throw Error("amg.smoother: unknown smoother '" + sm + "' (valid: auto, " + kSmootherKinds + ")");
-  if (opt.precision != "double" && opt.precision != "single")
-    throw Error("amg.precision: unknown precision '" + opt.precision + "' (valid: double, single)");
-}
-
-AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
-  check_option_names(opt);
-  if (info.block_size < 1) throw Error("mgpbd: block size must be >= 1");
-  if (opt.smoother.sweeps < 0) throw Error("amg.smoother_sweeps must be >= 0 (0: auto)");
-  if (opt.smoother.degree < 0) throw Error("amg.chebyshev_degree must be >= 0 (0: auto)");
-  AmgOptions o = opt;
-  const bool block = info.block_size > 1;
-  if (o.near_kernel.kind == "auto") o.near_kernel.kind = block && info.near_kernel ? "rigid" : "ones";
-  if (o.near_kernel.kind == "rigid" && !info.near_kernel)
-    throw Error("amg.near_kernel=rigid needs the rigid-body modes of the primal form (form=primal); this system has none");
-  if (o.prolongator == "auto") o.prolongator = block || o.near_kernel.kind == "gs_authors" ? "smoothed" : "tentative";
-  if (o.smoother.kind == "auto") o.smoother.kind = block ? kBlockSmoother : "chebyshev";
-  if (o.jacobi_omega == "level0" && o.smoother.kind != "jacobi" && o.smoother.kind != "chebyshev")
-    throw Error("amg.jacobi_omega=level0 needs amg.smoother jacobi or chebyshev (the smoother is " + o.smoother.kind + ")");
-  if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
-  if (o.smoother.degree == 0) o.smoother.degree = block ? kBlockChebyshevDegree : 3;
-  if (o.precision == "single" && (o.smoother.kind == "gs" || o.smoother.kind == "block_gs"))
-    throw Error("amg.precision=single runs the polynomial smoothers (jacobi, chebyshev, block_jacobi, block_chebyshev), not amg.smoother=" +
-                o.smoother.kind);
-  return o;
-}
-
-void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info) {
-  if (A.rows() != A.cols()) throw Error("mgpbd: the matrix is not square");
-  if (opt.max_levels < 1 || opt.max_levels > 64) throw Error("amg.max_levels must be between 1 and 64");
-  if (opt.max_coarse < 1) throw Error("amg.max_coarse must be >= 1");
+void Hierarchy::configure(const AmgOptions& opt, const MatrixInfo& info) {
   opt_ = resolve_options(opt, info);
   info_ = info;
+}
+
+void Hierarchy::build(const SparseMatrix& A) {
+  if (A.rows() != A.cols()) throw Error("mgpbd: the matrix is not square");
+  if (opt_.smoother.kind == "auto") throw Error("mgpbd: build() before configure()");
   levels_.clear();
   // Levels are never moved (a move would copy their matrices: core/sparse.hpp's take), and the
   // references coarsen() holds stay valid.
@@ -90,9 +23,9 @@ void Hierarchy::setup(const SparseMatrix& A, const AmgOptions& opt, const Matrix
   levels_[0].A = &A;
   fine_nnz_ = A.nonZeros();
   filter_ = ZeroBlockFilter{};
-  if (info.block_size > 1) {
+  if (info_.block_size > 1) {
     Level& L0 = levels_[0];
-    L0.nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info.block_size);
+    L0.nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info_.block_size);
     if (opt_.drop_tolerance > 0) {
       build_level_blocks(L0);
       if (L0.A_blocks && filter_.build(A, L0.A_blocks->pattern, opt_.drop_tolerance)) {
@@ -143,7 +76,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   if (static_cast<int>(levels_.size()) >= opt_.max_levels || n <= opt_.max_coarse) return false;
   if (levels_.size() == 1)
     B = near_kernel_candidates(Al, opt_.near_kernel, nullptr, info_.block_size, info_.near_kernel);
-  if (!L.A_blocks) build_level_blocks(L);  // level 0's may be built by setup()
+  if (!L.A_blocks) build_level_blocks(L);  // level 0's may be built by build()
   const AggregationRule rule = aggregation_rule(opt_.aggregation);
   const double nodal_theta = levels_.size() > 1 && opt_.coarse_nodal_strength_threshold >= 0
                                  ? opt_.coarse_nodal_strength_threshold
@@ -167,7 +100,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   if (opt_.prolongator == "smoothed") {
     // Where the smoother's D is the prolongator's, its λ_max(D⁻¹A) is reused: no second Lanczos.
     // Its node-block diagonal and A's block pattern as well.
-    const bool block_p = opt_.prolongator_diagonal == JacobiDiagonal::Block && !L.nodes.scalar();
+    const bool block_p = opt_.prolongator_diagonal == "block" && !L.nodes.scalar();
     ProlongatorReuse reuse;
     const BlockDiagonal* smoother_D = L.smoother->block_diagonal();
     if ((smoother_D != nullptr) == block_p) {
@@ -175,7 +108,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
       reuse.D = smoother_D;
     }
     if (L.A_blocks) reuse.A_pattern = &L.A_blocks->pattern;
-    SmoothedProlongator S = smooth_prolongator(Al, T.P, opt_.prolongator_diagonal, L.nodes,
+    SmoothedProlongator S = smooth_prolongator(Al, T.P, block_p ? JacobiDiagonal::Block : JacobiDiagonal::Scalar, L.nodes,
                                                opt_.smoother.power_iterations, opt_.smoother.seed,
                                                NodeLayout{T.col_start}, reuse);
     take(T.P, std::move(S.P));
@@ -183,7 +116,7 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
     T.max_row_entries = 0;
     for (int i = 0; i < n; ++i) T.max_row_entries = std::max(T.max_row_entries, static_cast<int>(T.P.row(i).nonZeros()));
   }
-  Level& next = levels_.emplace_back();  // no reallocation: setup() reserved max_levels
+  Level& next = levels_.emplace_back();  // no reallocation: build() reserved max_levels
   next.A = &next.A_own;
   if (!L.nodes.scalar()) {
     next.nodes.node_start = T.col_start;  // a coarse node = an aggregate's kept columns

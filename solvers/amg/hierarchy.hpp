@@ -3,7 +3,7 @@
 // max_levels levels exist; A_{l+1} = Pᵀ A_l P; a smoother per level; a direct (Cholesky) solve on
 // the coarsest level. Block systems (the primal form, block_size 3) are coarsened by nodes
 // (nodal.hpp) on every level.
-// setup() builds everything; refresh() keeps aggregates and P and recomputes only what depends
+// setup() (configure + build) builds everything; refresh() keeps aggregates and P and recomputes only what depends
 // on A's values (the lazy setup of the paper): A_l by the cached Galerkin pattern, diagonals,
 // spectral bounds, the coarse factorisation. The authors' variants: coarse_solver = smoother (the
 // coarsest level gets its smoother's sweeps from zero instead of a Cholesky solve) and
@@ -13,6 +13,7 @@
 #pragma once
 
 #include "aggregation.hpp"
+#include "amg_settings.hpp"
 #include "block_kernels.hpp"
 #include "galerkin.hpp"
 #include "near_kernel.hpp"
@@ -28,82 +29,7 @@
 #include <string>
 #include <vector>
 
-namespace xb {
-struct SolverSettings;
-}
-
 namespace xb::amg {
-
-struct AmgOptions {
-  double strength_threshold = 0.25;   // θ_s of scalar (dual) coarsening
-  // θ_s of nodal coarsening (block systems, on block Frobenius norms). 0 keeps every coupling, as
-  // pyamg's smoothed aggregation does by default: 0.25 isolates half the cloth's particles (an
-  // off-diagonal block of K is about a quarter of its diagonal block there) and shrinks the bar's
-  // aggregates to ~4 particles (operator complexity 7.7).
-  double nodal_strength_threshold = 0.0;
-  // θ_s of nodal coarsening on levels ≥ 1 (< 0: nodal_strength_threshold). Galerkin operators of
-  // a smoothed P couple neighbours of neighbours, so θ = 0 there merges ~25 aggregates into one
-  // (squash bunny:12k: 924 → 36 rows, 54 PCG iterations); 0.1 gives 924 → 156 and 36 iterations.
-  double coarse_nodal_strength_threshold = 0.1;
-  // A nodal aggregation with fewer than this many nodes per aggregate coarsens too slowly: a
-  // smoothed P then fills the next operator in. On levels ≥ 1 it is first redone at θ = 0 (the
-  // stretched bar, bar_hang r16, went 792 → 286 nodes at θ = 0.1, its level 2 43% dense); if it
-  // is still below (on any level: couplings along lines only, as the filtered bar's), its
-  // aggregates are aggregated again on the graph of their couplings until it is not. 0 = never.
-  double min_coarsening = 4;
-  // Block systems, level 0: node blocks below this fraction of their diagonals' geometric mean
-  // are dropped, their norms lumped onto the diagonal (zero_filter.hpp). Round-off zeros are
-  // ≤ 1e-14 there (bar_hang); the smallest real coupling on the captured systems is 3e-6 (squash
-  // bunny:50k). 0 = keep every block.
-  double drop_tolerance = 1e-10;
-  std::string aggregation = "standard";
-  NearKernelOptions near_kernel;      // kind "auto": rigid on a block system with a basis, else ones
-  std::string prolongator = "auto";   // auto (smoothed on block systems, else tentative) | tentative | smoothed
-  // D of the smoothed P. Block (a scalar layout's blocks are its diagonal): the same or fewer
-  // iterations than the scalar D on the captured primal systems (squash 29 against 31), and the
-  // block smoother's λ_max(D⁻¹A) serves P too (one Lanczos per level, not two).
-  JacobiDiagonal prolongator_diagonal = JacobiDiagonal::Block;
-  // kind "auto": kBlockSmoother on a block system, else chebyshev; sweeps 0: kBlockSmootherSweeps
-  // on a block system, else 1; degree 0: kBlockChebyshevDegree on a block system, else 3.
-  SmootherOptions smoother;
-  int max_coarse = 400;
-  int max_levels = 10;
-  std::string coarse_solver = "direct";   // direct | smoother
-  std::string jacobi_omega = "per_level";  // per_level | level0
-  // Storage of the V-cycle: "double", or "single" (float copies of every level's A, P, R and of
-  // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
-  std::string precision = "double";
-  // The amg.* keys of a SolverSettings (amg.strength_threshold, amg.nodal_strength_threshold,
-  // amg.coarse_nodal_strength_threshold, amg.min_coarsening, amg.drop_tolerance, amg.aggregation, amg.near_kernel*,
-  // amg.prolongator, amg.prolongator_diagonal, amg.smoother*, amg.chebyshev_degree,
-  // amg.max_coarse, amg.max_levels, amg.coarse_solver, amg.jacobi_omega, amg.precision, seed).
-  static AmgOptions from_settings(const SolverSettings& p);
-};
-
-// What amg.smoother = auto, amg.smoother_sweeps = 0 and amg.chebyshev_degree = 0 take on block
-// systems (the primal form): one sweep of a degree-4 Chebyshev in D_block⁻¹A. Per decade of
-// residual it is cheaper than degree 3 × 2 on every captured system (docs/kernels.md, "Smoother
-// cost per digit": four passes before and after instead of six, for 0–30% more iterations);
-// degree 3 × 1 is cheaper still but leaves the stretched bar above a fifth of dual jacobi-pcg's
-// iterations. Block Gauss–Seidel costs about twice as much per decade there.
-inline constexpr const char* kBlockSmoother = "block_chebyshev";
-inline constexpr int kBlockSmootherSweeps = 1;
-inline constexpr int kBlockChebyshevDegree = 4;
-
-// What the caller knows about the matrix beyond its entries (SetupContext's fields).
-struct MatrixInfo {
-  int block_size = 1;                          // unknowns per node, node-major
-  const Eigen::MatrixXd* near_kernel = nullptr;  // n × k basis (rigid-body modes), setup only
-};
-
-// Throws xb::Error naming the amg.* key of an unknown aggregation, near-kernel, prolongator or
-// smoother name, coarse solver or omega rule (the check a solver makes when it is created).
-void check_option_names(const AmgOptions& opt);
-// The options with "auto" resolved for this matrix (near_kernel = gs_authors makes an auto
-// prolongator smoothed, as the authors hand their candidates to smoothed aggregation); throws
-// xb::Error for unknown names, near_kernel = rigid without a basis and jacobi_omega = level0 with
-// a smoother other than jacobi or chebyshev.
-AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info);
 
 // A level in single precision (amg.precision = single).
 struct SingleLevel {
@@ -133,9 +59,16 @@ struct Level {
 
 class Hierarchy {
  public:
-  // opt may hold "auto" kinds: they are resolved against info (options() returns the result).
-  void setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info = {});
-  // A: same pattern as at setup(), new values. Throws xb::Error if the pattern size changed.
+  // Resolves opt against info (resolve_options, once; options() returns the result) and keeps
+  // both for build(). Throws xb::Error for bad options: bad input, found before any numerical work.
+  void configure(const AmgOptions& opt, const MatrixInfo& info = {});
+  // Every level from A with the configured options (info's near kernel is read here, not kept).
+  void build(const SparseMatrix& A);
+  void setup(const SparseMatrix& A, const AmgOptions& opt, const MatrixInfo& info = {}) {
+    configure(opt, info);
+    build(A);
+  }
+  // A: same pattern as at build(), new values. Throws xb::Error if the pattern size changed.
   // Returns false, with only level 0 refreshed, when level 0 dropped blocks (amg.drop_tolerance)
   // that A's values no longer make negligible: the hierarchy is stale and a full setup is due.
   bool refresh(const SparseMatrix& A);

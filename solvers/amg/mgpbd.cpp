@@ -23,12 +23,12 @@ class MgpbdSolver final : public LinearSolver {
  public:
   explicit MgpbdSolver(const SolverSettings& p)
       : LinearSolver(p.linear.tol),
-        opt_(amg::AmgOptions::from_settings(p)),
+        opt_(p.amg),
         maxit_(p.linear.max_iterations),
         natural_(p.linear.stop_norm == "energy"),
         policy_(p.amg.setup_interval) {
-    // Fail on bad names now, not at the first setup inside a run.
-    amg::check_option_names(opt_);
+    opt_.near_kernel.seed = opt_.smoother.seed = static_cast<unsigned>(p.seed);
+    check_settings(amg_settings(), opt_, "mgpbd");  // options set in code: fail now, not inside a run
   }
   std::string name() const override { return "mgpbd"; }
 
@@ -36,18 +36,19 @@ class MgpbdSolver final : public LinearSolver {
     Timer t;
     A_ = &A;
     failure_.clear();
-    // A configuration error (near_kernel = rigid on a system without rigid modes) is bad input,
-    // not a numerical failure: it propagates as xb::Error.
-    amg::resolve_options(opt_, {ctx.block_size, ctx.near_kernel});
     const bool built = !h_.empty() && A.rows() == h_.matrix(0).rows() && A.nonZeros() == nnz0_ &&
                        ctx.block_size == block_size_;
     const bool full = policy_.rebuild(kind, ctx, built);
+    // A configuration error (near_kernel = rigid on a system without rigid modes) is bad input,
+    // not a numerical failure: configure() lets it propagate as xb::Error. (A refresh keeps the
+    // hierarchy's levels; the options it reads are the same.)
+    h_.configure(opt_, {ctx.block_size, ctx.near_kernel});
     try {
       // A hierarchy built on couplings that were zero and are not any more is rebuilt too.
       if (!full && h_.refresh(A)) {
         action_ = "refresh";
       } else {
-        h_.setup(A, opt_, {ctx.block_size, ctx.near_kernel});
+        h_.build(A);
         nnz0_ = A.nonZeros();
         block_size_ = ctx.block_size;
         policy_.rebuilt(ctx);

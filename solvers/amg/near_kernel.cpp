@@ -20,11 +20,9 @@ Eigen::MatrixXd near_kernel_candidates(const SparseMatrix& A, const NearKernelOp
     return B;
   }
   if (opt.kind == "rigid") {
-    if (!given)
-      throw Error("amg.near_kernel=rigid needs the rigid-body modes of the primal form (form=primal); this system has none");
-    if (given->rows() != n || given->cols() < 1)
-      throw Error("amg.near_kernel=rigid: the near-kernel basis has " + std::to_string(given->rows()) + " rows, the matrix " +
-                  std::to_string(n));
+    if (!given || given->rows() != n || given->cols() < 1)
+      throw Error("amg.near_kernel=rigid: the near-kernel basis has " + std::to_string(given ? given->rows() : 0) +
+                  " rows, the matrix " + std::to_string(n));
     if (opt.extra < 0) throw Error("amg.near_kernel: the number of extra candidates must be >= 0");
     if (opt.extra == 0) return *given;
     // Adaptive-SA-style enrichment: relaxed random vectors carry the low-energy modes the rigid

@@ -60,6 +60,25 @@ TEST(Settings, ParseErrorsSayWhatIsWrong) {
   EXPECT_EQ(p.n, 7);
 }
 
+// A struct filled in code is checked against its table with the parse errors' words.
+TEST(Settings, CheckSettingsRefusesWhatTheTableRefuses) {
+  Part p;
+  EXPECT_NO_THROW(check_settings(part_table(), p, "here"));
+  p.s = "c";
+  try {
+    check_settings(part_table(), p, "here");
+    ADD_FAILURE() << "s = c accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("must be one of a, b"), std::string::npos) << e.what();
+  }
+  p.s = "b";
+  p.n = 11;
+  EXPECT_THROW(check_settings(part_table(), p, "here"), Error);
+  p.n = 10;
+  p.x = 0;
+  EXPECT_THROW(check_settings(part_table(), p, "here"), Error);
+}
+
 TEST(Settings, PartsRouteToTheirOwnStruct) {
   SettingTable<Whole> t;
   append_part(t, part_table(), [](Whole& w) -> Part& { return w.second; });
@@ -97,13 +116,13 @@ TEST(Settings, ParamsComposeEveryComponentOnce) {
 TEST(Settings, SolverSettingsRoundTripAsText) {
   // The MPI workers rebuild SolverSettings from rank 0's key=value lines.
   SolverSettings a;
-  a.amg.smoother = "block_gs";
+  a.amg.smoother.kind = "block_gs";
   a.hypre.max_levels = 7;
   a.linear.tol = 3.25e-7;
   a.seed = 11;
   SolverSettings b;
   for (const auto& f : solver_settings()) set_setting(solver_settings(), b, f.key, setting_text(f, a), "roundtrip");
   for (const auto& f : solver_settings()) EXPECT_EQ(setting_text(f, a), setting_text(f, b)) << f.key;
-  EXPECT_EQ(b.amg.smoother, "block_gs");
+  EXPECT_EQ(b.amg.smoother.kind, "block_gs");
   EXPECT_EQ(b.hypre.max_levels, 7);
 }

@@ -251,7 +251,7 @@ TEST(Profile, AuthorsKeysAndPrecedence) {
   EXPECT_EQ(p.amg.strength_threshold, 0.0);
   EXPECT_EQ(p.amg.coarse_solver, "smoother");
   EXPECT_EQ(p.amg.jacobi_omega, "level0");
-  EXPECT_EQ(p.amg.smoother_sweeps, 2);
+  EXPECT_EQ(p.amg.smoother.sweeps, 2);
   EXPECT_EQ(p.linear.tol, 1e-5);
   EXPECT_EQ(p.linear.max_iterations, 100);
   EXPECT_EQ(p.rtol, 1e-2);  // the scene's, untouched

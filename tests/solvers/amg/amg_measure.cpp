@@ -36,7 +36,7 @@ std::vector<std::string> split(const std::string& s, char sep) {
 }
 
 amg::AmgOptions variant_options(const std::string& spec) {
-  amg::AmgOptions o = amg::AmgOptions::from_settings(SolverSettings());
+  amg::AmgOptions o = SolverSettings().amg;
   for (const std::string& kv : split(spec, ',')) {
     const size_t eq = kv.find('=');
     if (eq == std::string::npos) continue;  // "default"
@@ -45,7 +45,7 @@ amg::AmgOptions variant_options(const std::string& spec) {
     else if (k == "smoother") o.smoother.kind = v;
     else if (k == "sweeps") o.smoother.sweeps = std::stoi(v);
     else if (k == "prol") o.prolongator = v;
-    else if (k == "diag") o.prolongator_diagonal = v == "block" ? amg::JacobiDiagonal::Block : amg::JacobiDiagonal::Scalar;
+    else if (k == "diag") o.prolongator_diagonal = v;
     else if (k == "nk") o.near_kernel.kind = v;
     else if (k == "nkv") o.near_kernel.vectors = std::stoi(v);
     else if (k == "extra") o.near_kernel.extra = std::stoi(v);
@@ -147,10 +147,10 @@ void measure_scenes(const std::string& size) {
       for (const std::string sm : {"jacobi", "chebyshev", "gs"})
         for (int sw : {1, 2}) {
           const std::string nk = nkv == "ones" ? "ones" : "gs";
-          p.amg.smoother = sm;
-          p.amg.near_kernel = nk;
-          p.amg.near_kernel_vectors = nkv == "gs4" ? 4 : 1;
-          p.amg.smoother_sweeps = sw;
+          p.amg.smoother.kind = sm;
+          p.amg.near_kernel.kind = nk;
+          p.amg.near_kernel.vectors = nkv == "gs4" ? 4 : 1;
+          p.amg.smoother.sweeps = sw;
           auto mg = make_linear_solver("mgpbd", p);
           mg->setup(A, SetupKind::Structure, {});
           const LinearStats ms = mg->solve(s.b, x);

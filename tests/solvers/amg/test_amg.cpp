@@ -307,10 +307,10 @@ TEST(AmgLazySetup, RefreshKeepsSizesAndMatchesAFreshGalerkinProduct) {
 
 TEST(AmgBadInput, ClearErrors) {
   Params p;
-  p.amg.smoother = "sor";
+  p.amg.smoother.kind = "sor";
   EXPECT_THROW(make_linear_solver("mgpbd", p), Error);
   p = Params();
-  p.amg.near_kernel = "constant";
+  p.amg.near_kernel.kind = "constant";
   EXPECT_THROW(make_linear_solver("mgpbd", p), Error);
   // Solve before setup is a breakdown, not a crash.
   auto s = make_linear_solver("mgpbd", Params());
@@ -344,8 +344,8 @@ TEST(AmgScenes, MgpbdConvergesInAThirdOfCgIterations) {
       const char *smoother, *near_kernel;
     };
     for (const Config k : {Config{"chebyshev", "ones"}, Config{"chebyshev", "gs"}, Config{"jacobi", "ones"}, Config{"gs", "ones"}}) {
-      p.amg.smoother = k.smoother;
-      p.amg.near_kernel = k.near_kernel;
+      p.amg.smoother.kind = k.smoother;
+      p.amg.near_kernel.kind = k.near_kernel;
       auto mg = make_linear_solver("mgpbd", p);
       mg->setup(A, SetupKind::Structure, {});
       const LinearStats ms = mg->solve(s.b, x);

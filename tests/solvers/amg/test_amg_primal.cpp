@@ -30,7 +30,7 @@ TEST(AmgPrimal, MgpbdConvergesAndEqualsADirectSolve) {
     const Vector x_direct = ldlt.solve(c.f);
     for (const std::string sm : {"chebyshev", "jacobi", "gs"}) {
       Params p = solver_params(1e-8);
-      p.amg.smoother = sm;
+      p.amg.smoother.kind = sm;
       Vector x, r;
       const LinearStats st = solve_k(c, p, "mgpbd", x);
       const std::string what = std::string(scene) + " " + sm + ": " + std::to_string(st.iterations) + " iterations";
@@ -117,7 +117,7 @@ TEST(AmgPrimal, LazyRefreshAndBadInput) {
   EXPECT_GE(stats.at("levels"), 2);
   EXPECT_GT(stats.at("operator_complexity"), 1.0);
 
-  p.amg.near_kernel = "rigid";
+  p.amg.near_kernel.kind = "rigid";
   auto rigid = make_linear_solver("mgpbd", p);  // valid name: only the setup without modes fails
   EXPECT_THROW(rigid->setup(c.A(), SetupKind::Structure, {}), Error);
   p.amg.prolongator = "energy";
@@ -167,7 +167,7 @@ TEST(AmgPrimal, ExtraCandidatesAndChebyshevDegreeKeys) {
   Params p = solver_params(1e-8);
   set_param(p, "amg.near_kernel_extra", "2", "test");
   set_param(p, "amg.chebyshev_degree", "5", "test");
-  const amg::AmgOptions o = amg::AmgOptions::from_settings(p);
+  const amg::AmgOptions o = p.amg;
   EXPECT_EQ(o.near_kernel.extra, 2);
   EXPECT_EQ(o.smoother.degree, 5);
   EXPECT_THROW(set_param(p, "amg.chebyshev_degree", "-1", "test"), Error);
@@ -183,10 +183,10 @@ TEST(AmgPrimal, ExtraCandidatesAndChebyshevDegreeKeys) {
   const LinearStats st = solve_k(c, p, "mgpbd", x, c.dual_measure());
   EXPECT_EQ(st.status, LinearStatus::converged);
   Params once = solver_params(1e-8);
-  once.amg.smoother_sweeps = 1;
-  once.amg.chebyshev_degree = 3;
+  once.amg.smoother.sweeps = 1;
+  once.amg.smoother.degree = 3;
   const LinearStats deg3 = solve_k(c, once, "mgpbd", x, c.dual_measure());
-  once.amg.chebyshev_degree = 5;
+  once.amg.smoother.degree = 5;
   const LinearStats deg5 = solve_k(c, once, "mgpbd", x, c.dual_measure());
   EXPECT_LE(deg5.iterations, deg3.iterations) << deg5.iterations << " vs " << deg3.iterations;
 }

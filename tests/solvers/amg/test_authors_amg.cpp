@@ -120,7 +120,7 @@ TEST(AuthorsAmg, JacobiOmegaLevel0SharesLevelZerosLambda) {
   g.jacobi_omega = "level0";
   EXPECT_THROW(resolve_options(g, {}), Error);
   g.jacobi_omega = "per_levels";
-  EXPECT_THROW(check_option_names(g), Error);
+  EXPECT_THROW(resolve_options(g, {}), Error);
 }
 
 // gs_authors: 6 columns, each the direction of 30 sequential forward GS sweeps x ← −(D+L)⁻¹U x
@@ -174,7 +174,7 @@ TEST(AuthorsAmg, ParamsKeys) {
   set_param(p, "amg.coarse_solver", "smoother", "test");
   set_param(p, "amg.jacobi_omega", "level0", "test");
   set_param(p, "amg.near_kernel", "gs_authors", "test");
-  const AmgOptions o = AmgOptions::from_settings(p);
+  const AmgOptions o = p.amg;
   EXPECT_EQ(o.coarse_solver, "smoother");
   EXPECT_EQ(o.jacobi_omega, "level0");
   EXPECT_EQ(o.near_kernel.kind, "gs_authors");

@@ -139,6 +139,7 @@ TEST(AmgBlockSparse, HierarchyLevelsEqualTheScalarGalerkinProducts) {
   Hierarchy h;
   AmgOptions opt;
   opt.max_coarse = 50;
+  opt.near_kernel.kind = "ones";  // coarse nodes of 3 columns (< 6: what small_nodes counts)
   MatrixInfo info;
   info.block_size = 3;
   info.near_kernel = &c.rigid;

@@ -168,9 +168,9 @@ TEST(AmgSinglePrecision, GaussSeidelKindsAndUnknownNamesAreRefused) {
   }
   o.smoother.kind = "chebyshev";
   o.precision = "half";
-  EXPECT_THROW(check_option_names(o), Error);
+  EXPECT_THROW(resolve_options(o, {}), Error);
   Params p;
   EXPECT_THROW(set_param(p, "amg.precision", "half", "test"), Error);
   set_param(p, "amg.precision", "single", "test");
-  EXPECT_EQ(AmgOptions::from_settings(p).precision, "single");
+  EXPECT_EQ(p.amg.precision, "single");
 }
