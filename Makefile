@@ -37,7 +37,7 @@ FIGURES_SIZE ?= default
 figures: build
 	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
-# The simulation-level race (figures/race.toml): every method at its best, per frame, across sizes,
+# The simulation-level race (figures/race/race.toml): every method at its best, per frame, across sizes,
 # one process per run, into plots/race/ (race_<scene>.png, race_crossover.png, summary.md).
 # Resumes (finished runs are kept); RACE_ARGS="--fresh", "--only squash --sizes 0,1", "--methods mgpbd,cholmod".
 RACE_ARGS ?=

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""`make race`: the simulation-level race of figures/race.toml, one process per run.
+"""`make race`: the simulation-level race of figures/race/race.toml, one process per run.
 
-usage: python3 figures/race.py [--bench build/xpbd-bench] [--spec figures/race.toml]
+usage: python3 figures/race.py [--bench build/xpbd-bench] [--spec figures/race/race.toml]
                                [--out plots/race] [--only squash,cloth_hang] [--sizes 0,1]
                                [--methods mgpbd,cholmod] [--fresh] [--dry-run]
 
@@ -133,10 +133,33 @@ def run_scene(args, spec, scene_name, scene):
     return forms
 
 
+def check_spec(bench, spec):
+    """Every scene, solver and --set key of the spec is known to the binary (`xpbd-bench list`)."""
+    out = subprocess.run([bench, "list"], capture_output=True, text=True, check=True).stdout
+    part, names = None, {"scenes": set(), "solvers": set(), "keys": set()}
+    for line in out.splitlines():
+        if line.endswith(":") and not line.startswith(" "):
+            part = {"scenes:": "scenes", "solvers:": "solvers"}.get(line, "keys" if line.startswith("param") else None)
+        elif line.startswith("  ") and part:
+            names[part].add(line.split()[0])
+    bad = []
+    for name, m in spec["methods"].items():
+        if m.get("solver") not in names["solvers"]:
+            bad.append(f"methods.{name}: unknown solver {m.get('solver')!r}")
+        bad += [f"methods.{name}: unknown key {k!r}" for k in m.get("set", {}) if k not in names["keys"]]
+    for name, sc in spec["scenes"].items():
+        if sc.get("scene") not in names["scenes"]:
+            bad.append(f"scenes.{name}: unknown scene {sc.get('scene')!r}")
+        for t in [sc.get("set", {})] + [z.get("set", {}) for z in sc.get("sizes", [])]:
+            bad += [f"scenes.{name}: unknown key {k!r}" for k in t if k not in names["keys"]]
+    if bad:
+        sys.exit("race spec: " + "; ".join(bad))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--bench", default=os.path.join(ROOT, "build", "xpbd-bench"))
-    ap.add_argument("--spec", default=os.path.join(HERE, "race.toml"))
+    ap.add_argument("--spec", default=os.path.join(HERE, "race", "race.toml"))
     ap.add_argument("--out", default=os.path.join(ROOT, "plots", "race"))
     ap.add_argument("--only", default="", help="comma-separated scene names of the spec")
     ap.add_argument("--sizes", default="", help="comma-separated size indices (0 = smallest)")
@@ -151,6 +174,7 @@ def main():
         sys.exit(f"{args.spec}: {e}")
     if not os.access(args.bench, os.X_OK):
         sys.exit(f"{args.bench}: not an executable (build first: make build)")
+    check_spec(args.bench, spec)
     scenes = {k: v for k, v in spec["scenes"].items() if not args.only or k in args.only.split(",")}
     unknown = set(filter(None, args.only.split(","))) - set(spec["scenes"])
     if unknown:

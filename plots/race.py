@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The race's figures and summary (figures/race.py runs it; this redraws from its data).
 
-usage: python3 plots/race.py DATA_DIR [--out plots/race] [--spec figures/race.toml]
+usage: python3 plots/race.py DATA_DIR [--out plots/race] [--spec figures/race/race.toml]
 
 DATA_DIR holds <scene>/<size>/<method>.<form>.<forcing>.h5, one run each. Draws, per scene,
 OUT/race_<scene>.png (relative dual residual against wall time within the frame, one panel per
@@ -207,7 +207,7 @@ def main():
     ap.add_argument("data")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "race"))
     ap.add_argument("--spec", default=os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                                                   "figures", "race.toml"))
+                                                   "figures", "race", "race.toml"))
     args = ap.parse_args()
     with open(args.spec, "rb") as fh:
         spec = tomllib.load(fh)
