@@ -9,9 +9,11 @@ Every run is `xpbd-bench run` in a process of its own (a later run in the same p
 the earlier one's freed pages), into OUT/data/<scene>/<size>/<method>.<form>.<forcing>.h5; a file
 that exists is a finished run and is not run again (--fresh starts over). Per scene, each global
 method's form is chosen at the smallest size (both forms run there with linear.forcing = fixed;
-the one with the lower time per outer iteration wins) and kept for the larger sizes. The local
-method (xpbd-gs) gets as much wall time as exact CHOLMOD's frame took. Then plots/race.py draws
-OUT/race_<scene>.png, OUT/race_crossover.png and writes OUT/summary.md.
+the one with the lower time per outer iteration wins) and kept for the larger sizes. Exact CHOLMOD
+runs first at each size; every other entry then races to the relative dual residual it ended the
+frame at (rtol = that residual, at most `overrun` times the frame's outer iterations, at most
+`budget_factor` times its wall time). Then plots/race.py draws OUT/race_<scene>.png,
+OUT/race_crossover.png and writes OUT/summary.md.
 """
 import argparse
 import os
@@ -77,59 +79,74 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
     return runs[-1] if runs else None
 
 
-def budget(spec, exact_time):
+def budget(spec, exact):
     """A run's time budget: the spec's, and at most budget_factor × exact CHOLMOD's frame."""
-    if exact_time is None:
+    if exact is None:
         return spec["time_budget"]
-    return min(spec["time_budget"], max(10.0, spec.get("budget_factor", 4) * exact_time))
+    return min(spec["time_budget"], max(10.0, spec.get("budget_factor", 4) * exact["time"]))
 
 
-def choose_form(args, spec, scene_name, scene, size, method, m, exact_time):
-    """The form of `method` for this scene: both forms at the smallest size, the faster per outer
-    iteration (fixed forcing). Returns (form, exact CHOLMOD's frame time if this was cholmod)."""
-    timing, walls = {}, {}
+def entry_sets(spec, scene, size, m, forcing, exact):
+    """The --set keys of one entry. Once exact CHOLMOD has run at this size, the others race to its
+    end-of-frame residual: rtol = that residual, at most `overrun` times the frame's iterations."""
+    sets = sets_of(scene.get("set"), size.get("set"), m.get("set"))
+    if forcing:
+        sets["linear.forcing"] = forcing
+    if exact is not None:
+        sets.update({"rtol": exact["target"], "atol": 0,
+                     "max_iterations": int(spec.get("overrun", 3) * int(sets.get("max_iterations", 100)))})
+    if m.get("local"):
+        sets["max_iterations"] = LOCAL_MAX_ITERATIONS
+    return sets
+
+
+def exact_of(r):
+    """Exact CHOLMOD's frame: its wall time and the relative dual residual it ends at."""
+    if r is None or r["attrs"].get("status") not in ("ok", "max_iterations"):
+        return None
+    return {"time": float(r["attrs"]["wall_time"]), "target": float(r["attrs"]["relative_dual_residual"])}
+
+
+def choose_form(args, spec, scene_name, scene, size, name, m, exact):
+    """The form of method `name` for this scene: both forms at the smallest size, the faster per
+    outer iteration (fixed forcing). Returns the form and that form's run."""
+    timing, runs = {}, {}
     for form in ("dual", "primal"):
-        sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"linear.forcing": "fixed"})
-        path = run_file(args.out, scene_name, size["label"], method, form, "fixed")
-        r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact_time), args.dry_run)
+        sets = entry_sets(spec, scene, size, m, "fixed", exact)
+        path = run_file(args.out, scene_name, size["label"], name, form, "fixed")
+        r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run)
         if r is not None and r["attrs"].get("status") in ("ok", "max_iterations") and r["attrs"]["outer_iterations"] > 0:
             timing[form] = float(r["attrs"]["wall_time"]) / float(r["attrs"]["outer_iterations"])
-            walls[form] = float(r["attrs"]["wall_time"])
+            runs[form] = r
     form = min(timing, key=timing.get) if timing else "primal"
-    return form, walls.get(form)
+    return form, runs.get(form)
 
 
 def run_scene(args, spec, scene_name, scene):
+    """Every entry of one scene; exact CHOLMOD first at each size (the others race to its residual)."""
     sizes = scene["sizes"]
     chosen = [int(i) for i in args.sizes.split(",")] if args.sizes else range(len(sizes))
     methods = {k: v for k, v in spec["methods"].items() if not args.methods or k in args.methods.split(",")}
-    forms, exact_time = {}, None
-    for name, m in methods.items():
-        if not m.get("local"):
-            forms[name], wall = choose_form(args, spec, scene_name, scene, sizes[0], name, m, exact_time)
+    order = sorted(methods, key=lambda k: k != "cholmod")
+    forms, exact = {}, None
+    for name in order:
+        if not methods[name].get("local"):
+            forms[name], r = choose_form(args, spec, scene_name, scene, sizes[0], name, methods[name], exact)
             if name == "cholmod":
-                exact_time = wall
+                exact = exact_of(r)
     print(f"race: {scene_name} forms: " + ", ".join(f"{k} {v}" for k, v in forms.items()), flush=True)
     for i in chosen:
-        size = sizes[i]
-        exact_time = None
-        for name, m in methods.items():
-            if m.get("local"):
-                continue
-            for forcing in (spec["forcing"] if m.get("forcing", True) else ["fixed"]):
-                sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"linear.forcing": forcing})
-                path = run_file(args.out, scene_name, size["label"], name, forms[name], forcing)
-                r = run_one(args.bench, path, scene["scene"], m["solver"], forms[name], sets,
-                            budget(spec, None if name == "cholmod" else exact_time), args.dry_run)
-                if name == "cholmod" and r is not None:
-                    exact_time = float(r["attrs"]["wall_time"])
-        for name, m in methods.items():
-            if not m.get("local"):
-                continue
-            sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), {"max_iterations": LOCAL_MAX_ITERATIONS})
-            path = run_file(args.out, scene_name, size["label"], name, "none", "none")
-            run_one(args.bench, path, scene["scene"], m["solver"], "none", sets,
-                    exact_time if exact_time else spec["time_budget"], args.dry_run)
+        size, exact = sizes[i], None
+        for name in order:
+            m = methods[name]
+            form = "none" if m.get("local") else forms[name]
+            rules = ["none"] if m.get("local") else spec["forcing"] if m.get("forcing", True) else ["fixed"]
+            for forcing in rules:
+                sets = entry_sets(spec, scene, size, m, None if forcing == "none" else forcing, exact)
+                path = run_file(args.out, scene_name, size["label"], name, form, forcing)
+                r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run)
+                if name == "cholmod":
+                    exact = exact_of(r)
     return forms
 
 
