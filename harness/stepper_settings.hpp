@@ -22,7 +22,7 @@ struct StepperSettings {
   int threads = 0;  // OpenMP threads, 0 = OpenMP's default
   // The form of every global method's linear step: dual (A Δλ = b) | primal (K Δx = Jᵀα̃⁻¹b,
   // then Δλ = α̃⁻¹(b − JΔx); needs every α̃ > 0) | auto (primal when every α̃ > 0, else dual).
-  std::string form = "dual";
+  std::string form = "auto";
 };
 
 const SettingTable<StepperSettings>& stepper_settings();

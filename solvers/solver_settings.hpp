@@ -16,7 +16,7 @@ struct LinearSettings {
   int max_iterations = 1000;
   // The inner tolerance of each outer iteration (harness/sim/forcing.hpp): fixed (linear.tol) or
   // eisenstat_walker (choice 2 of Eisenstat & Walker 1996 from the outer residual's progress).
-  std::string forcing = "fixed";
+  std::string forcing = "eisenstat_walker";
   double forcing_max = 0.9, forcing_gamma = 0.9, forcing_alpha = 2;
   // The norm a solve stops on: dual (‖J M⁻¹ r_K‖ in the primal form; the dual system's own
   // residual in the dual form), primal (the solved system's own ‖r‖₂/‖b‖₂) or energy (the

@@ -154,7 +154,7 @@ TEST(LinearLevel, SolveRecordsEverySolverWithRecomputedResiduals) {
   const std::string prefix = dir / "bar";
   ASSERT_EQ(cmd_capture(capture_args("bar_hang", small_bar, 0, 1, prefix)), 0);
   const std::string out = dir / "solve.h5";
-  ASSERT_EQ(cmd_solve({"--system", prefix + ".h5", "--solver", "cg,jacobi-pcg,cholmod", "--tol", "1e-10", "--out", out}), 0);
+  ASSERT_EQ(cmd_solve({"--system", prefix + ".h5", "--solver", "cg,jacobi-pcg,cholmod", "--tol", "1e-10", "--set", "form=dual", "--out", out}), 0);
   const CapturedSystem s = read_system_h5(prefix + ".h5");
   const Vector xstar = reference_solution(s.A, s.b);
   const auto runs = read_runs(out, true);
@@ -283,7 +283,7 @@ namespace {
 // Solves a captured system with one solver and returns its run record (with datasets).
 RunRecord solve_one(const std::string& system, const std::string& solver, const std::vector<std::string>& sets,
                     const std::string& out) {
-  CommandArgs a{"--system", system, "--solver", solver, "--tol", "1e-8", "--out", out};
+  CommandArgs a{"--system", system, "--solver", solver, "--tol", "1e-8", "--set", "form=dual", "--out", out};
   for (const auto& s : sets) {
     a.push_back("--set");
     a.push_back(s);

@@ -25,6 +25,7 @@ LinearSettings eisenstat_walker(double tol, double max) {
 
 TEST(Forcing, FixedIsTheTolerance) {
   LinearSettings s;
+  s.forcing = "fixed";
   s.tol = 1e-6;
   ForcingRule f(s);
   EXPECT_EQ(f.next(0, 1.0), 1e-6);

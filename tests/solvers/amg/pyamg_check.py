@@ -65,7 +65,7 @@ def harness_mgpbd(binary, system, theta, opts, workdir, extra=None, tol=None):
         "amg.max_levels": opts.max_levels,
         **(extra or {}),
     }
-    cmd = [binary, "solve", "--system", system, "--solver", "mgpbd", "--tol", str(tol or opts.tol), "--out", out]
+    cmd = [binary, "solve", "--system", system, "--solver", "mgpbd", "--tol", str(tol or opts.tol), "--set", "form=dual", "--out", out]
     for k, v in sets.items():
         cmd += ["--set", f"{k}={v}"]
     run(cmd)

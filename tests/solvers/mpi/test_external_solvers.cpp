@@ -274,7 +274,7 @@ std::pair<std::vector<RunRecord>, std::vector<RunRecord>> one_and_two_ranks(cons
 // and the results say how many ranks ran.
 TEST(ExternalSolverMpi, TwoRanksMatchOneProcess) {
   const std::string args =
-      " run --scene bar_hang --solver hypre,muelu --set resolution=2 --set aspect=2 --out ";
+      " run --scene bar_hang --solver hypre,muelu --set resolution=2 --set aspect=2 --set form=dual --set linear.forcing=fixed --out ";
   const std::string two = (scratch() / "np2.h5").string();
   const auto [r1, r2] = one_and_two_ranks(args, (scratch() / "np1.h5").string(), two);
   ASSERT_EQ(r1.size(), 2u);
@@ -320,7 +320,7 @@ void expect_two_ranks_match_one_process(const std::string& scene, int resolution
             0)
       << err;
   const auto [r1, r2] =
-      one_and_two_ranks(" solve --system " + prefix + ".h5 --solver hypre,muelu --out ", prefix + "_np1.h5", prefix + "_np2.h5");
+      one_and_two_ranks(" solve --system " + prefix + ".h5 --solver hypre,muelu --set form=dual --out ", prefix + "_np1.h5", prefix + "_np2.h5");
   ASSERT_EQ(r1.size(), 2u);
   ASSERT_EQ(r2.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
@@ -369,7 +369,7 @@ TEST(ExternalSolverMpi, NanSystemRecordsErrorOnEveryRankCount) {
     H5Fclose(f);
   }
   const auto [r1, r2] =
-      one_and_two_ranks(" solve --system " + prefix + ".h5 --solver hypre,muelu --out ", prefix + "_np1.h5", prefix + "_np2.h5");
+      one_and_two_ranks(" solve --system " + prefix + ".h5 --solver hypre,muelu --set form=dual --out ", prefix + "_np1.h5", prefix + "_np2.h5");
   ASSERT_EQ(r1.size(), 2u);
   ASSERT_EQ(r2.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
