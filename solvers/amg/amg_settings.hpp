@@ -27,9 +27,11 @@ struct AmgOptions {
   // aggregates to ~4 particles (operator complexity 7.7).
   double nodal_strength_threshold = 0.0;
   // θ_s of nodal coarsening on levels ≥ 1 (< 0: nodal_strength_threshold). Galerkin operators of
-  // a smoothed P couple neighbours of neighbours, so θ = 0 there merges ~25 aggregates into one
-  // (squash bunny:12k: 924 → 36 rows, 54 PCG iterations); 0.1 gives 924 → 156 and 36 iterations.
-  double coarse_nodal_strength_threshold = 0.1;
+  // a smoothed P couple neighbours of neighbours, so θ = 0 there (pyamg's) coarsens level 1 by
+  // ~80× on squash bunny:270k (22,458 → 288 rows); 0.1 made a 2,832-row level 2 with 929
+  // non-zeros per row, whose Galerkin products were half the refresh (operator complexity 2.02
+  // against 1.67), for the same 16 PCG iterations to a dual 1e-1 (docs/amg_scaling.md).
+  double coarse_nodal_strength_threshold = 0.0;
   // A nodal aggregation with fewer than this many nodes per aggregate coarsens too slowly: a
   // smoothed P then fills the next operator in. On levels ≥ 1 it is first redone at θ = 0 (the
   // stretched bar, bar_hang r16, went 792 → 286 nodes at θ = 0.1, its level 2 43% dense); if it

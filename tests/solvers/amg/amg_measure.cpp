@@ -7,6 +7,8 @@
 //     SYSTEMS  "scene/key=value/...;..."  (frames=N, iterations=N are the state, others Params keys)
 //     VARIANTS "key=value,...;..." keys: theta smoother sweeps prol diag nk nkv extra ctheta nks max_coarse
 //     XB_AMG_DUMP=DIR also writes K, f, the rigid modes, J, M⁻¹, α̃ and b as Matrix Market.
+//   xb_amg_measure captured PREFIX.h5 [VARIANTS]
+//     mgpbd's hierarchy level by level on the primal K of a captured system (amg_measure_captured.cpp).
 //   xb_amg_measure scenes [small|default|big]
 //     Levels, operator complexity, PCG iterations and times per smoother and near-kernel of the
 //     dual mgpbd on cloth_hang and bar_hang after two outer iterations.
@@ -25,6 +27,10 @@
 #include <sstream>
 
 using namespace xb;
+
+namespace xb::test {
+void measure_captured(const std::string& path, const std::vector<std::string>& variants);
+}
 
 namespace {
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -175,10 +181,12 @@ int main(int argc, char** argv) {
     if (mode == "systems")
       measure_systems(argc > 2 ? argv[2] : "cloth_hang/resolution=64/frames=3;bar_hang/resolution=8/frames=1",
                       argc > 3 ? argv[3] : "default;theta=0;prol=tentative;diag=block");
+    else if (mode == "captured" && argc > 2)
+      test::measure_captured(argv[2], split(argc > 3 ? argv[3] : "default", ';'));
     else if (mode == "scenes")
       measure_scenes(argc > 2 ? argv[2] : "default");
     else
-      throw std::invalid_argument("usage: xb_amg_measure systems [SYSTEMS] [VARIANTS] | scenes [small|default|big]");
+      throw std::invalid_argument("usage: xb_amg_measure systems [SYSTEMS] [VARIANTS] | captured PREFIX.h5 [VARIANTS] | scenes [small|default|big]");
   } catch (const std::exception& e) {
     std::cerr << "xb_amg_measure: " << e.what() << "\n";
     return 1;

@@ -150,6 +150,7 @@ TEST(AmgPrimal, MinCoarseningRedoesSlowCoarseAggregation) {
   Vector x;
   Params p = solver_params(1e-8);
   p.amg.drop_tolerance = 0;
+  p.amg.coarse_nodal_strength_threshold = 0.1;
   p.amg.min_coarsening = 0;
   const LinearStats st_off = solve_k(c, p, "mgpbd", x, c.dual_measure());
   p.amg.min_coarsening = 4;
