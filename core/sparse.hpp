@@ -3,7 +3,12 @@
 #include <Eigen/Sparse>
 
 namespace xb {
-using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+// S: the storage precision (double; float for the V-cycle's single-precision copy).
+template <class S>
+using CsrOf = Eigen::SparseMatrix<S, Eigen::RowMajor, int>;
+template <class S>
+using VectorOf = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+using SparseMatrix = CsrOf<double>;
 using Vector = Eigen::VectorXd;
 
 // dst takes src's arrays. Eigen 3.4's SparseMatrix has no move constructor or move assignment:

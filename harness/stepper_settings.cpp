@@ -1,5 +1,7 @@
 #include "stepper_settings.hpp"
 
+#include "../problems/primal_system.hpp"
+
 namespace xb {
 
 const SettingTable<StepperSettings>& stepper_settings() {
@@ -13,7 +15,7 @@ const SettingTable<StepperSettings>& stepper_settings() {
       setting("residual_metric", "dual residual of the stop test: true (|C(x_k) + alpha~ lambda_k|) | authors (|C(x~) + alpha~ lambda_k| local, |C(x_k-1) + alpha~ lambda_k| global)", &S::residual_metric, {"true", "authors"}),
       setting("step", "global step: fixed (x += omega M^-1 grad C^T dlambda) | line_search (lambda += dlambda, then x += t dx with t = 1, 1/2, ... the first that lowers |C(x) + alpha~ lambda|)", &S::step, {"fixed", "line_search"}),
       setting("threads", "OpenMP threads (0 = default)", &S::threads, 0, 4096),
-      setting("form", "linear step of global methods: dual (A dlambda = b) | primal (K dx = J^T alpha~^-1 b, every alpha~ > 0) | auto (primal when every alpha~ > 0)", &S::form, {"dual", "primal", "auto"}),
+      setting("form", "linear step of global methods: dual (A dlambda = b) | primal (K dx = J^T alpha~^-1 b, every alpha~ > 0) | auto (primal when every alpha~ > 0)", &S::form, form_choices()),
   };
   return table;
 }

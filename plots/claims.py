@@ -13,39 +13,11 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import xbruns  # noqa: E402
+from claim_data import DATA, failed, fmt, last_substep, runs_of  # noqa: E402
+import profile_claims  # noqa: E402
 
 # --only NAME for a claim whose inputs are several specs (a sweep spec has one scene).
 GROUPS = {"dual_primal": ["dual_primal", "dual_primal_bar"]}
-
-
-# ---------------------------------------------------------------- measuring
-DATA = ("frame", "substep", "iteration", "dual_residual", "relative_dual_residual", "wall_time", "energy",
-        "linear_iterations", "linear_relative_residual", "position_error")
-
-
-def runs_of(path, **kw):
-    return xbruns.load(path, **kw) if path and os.path.exists(path) else []
-
-
-def by(runs, **match):
-    return [r for r in runs if all(str(r["attrs"].get(k)) == str(v) for k, v in match.items())]
-
-
-def e(v, digits=3):
-    if v is None or (isinstance(v, float) and math.isnan(v)):
-        return "—"
-    if isinstance(v, (int, np.integer)) or (isinstance(v, float) and v.is_integer() and abs(v) < 1e6):
-        return str(int(v))
-    return f"{v:.{digits}g}"
-
-
-def last_substep(run):
-    d = run["data"]
-    return int(d["frame"][-1]), int(d["substep"][-1])
-
-
-def failed(run):
-    return run["attrs"].get("status") in ("error", "nan", "breakdown", "diverged")
 
 
 def status_note(run):
@@ -70,10 +42,10 @@ class Summary:
 
 
 def tets(run):
-    return e(xbruns.as_number(run["attrs"].get("rows")))
+    return fmt(xbruns.as_number(run["attrs"].get("rows")))
 
 
-def claim_squash(S, files, notes, out):
+def claim_squash(summary, files, notes, out):
     claim = "squash: XPBD stalls, MGPBD reaches 1e-2 in 55–59"
     paper_x = {"bunny:5k": "0.969", "bunny:12k": "0.771", "bunny:270k": "0.727"}
     paper_m = {"bunny:5k": ("118", "7.8 s", "4.0e-4 at 500"), "bunny:12k": ("55", "3.7 s", "3.7e-6 at 500"),
@@ -82,33 +54,33 @@ def claim_squash(S, files, notes, out):
     rm = runs_of(files.get("squash_mgpbd"), datasets=DATA)
     for key in ("squash_xpbd", "squash_mgpbd"):
         if key in notes:
-            S.add(claim, f"inputs of {key}", "—", f"not run: {notes[key]}" if not (rx if key == 'squash_xpbd' else rm)
+            summary.add(claim, f"inputs of {key}", "—", f"not run: {notes[key]}" if not (rx if key == 'squash_xpbd' else rm)
                   else f"partly run: {notes[key]}")
     for r in rx:
         m = r["attrs"].get("mesh")
         if failed(r):
-            S.add(claim, f"{r['attrs'].get('solver')} rel. dual residual after 10⁴ its, {m}", paper_x.get(m, "—"),
+            summary.add(claim, f"{r['attrs'].get('solver')} rel. dual residual after 10⁴ its, {m}", paper_x.get(m, "—"),
                   f"not run: {status_note(r)}")
             continue
         its = int(r["data"]["iteration"][-1])
-        S.add(claim, f"{r['attrs'].get('solver')} relative dual residual after {its} its ({tets(r)} tets, {m})",
+        summary.add(claim, f"{r['attrs'].get('solver')} relative dual residual after {its} its ({tets(r)} tets, {m})",
               paper_x.get(m, "—"),
-              f"{e(float(r['data']['relative_dual_residual'][-1]))} ({e(float(r['attrs']['wall_time']))} s)",
+              f"{fmt(float(r['data']['relative_dual_residual'][-1]))} ({fmt(float(r['attrs']['wall_time']))} s)",
               status_note(r))
     for r in rm:
         m = r["attrs"].get("mesh")
         p = paper_m.get(m, ("—", "—", "—"))
         if failed(r):
-            S.add(claim, f"MGPBD iterations to 1e-2, {m}", p[0], f"not run: {status_note(r)}")
+            summary.add(claim, f"MGPBD iterations to 1e-2, {m}", p[0], f"not run: {status_note(r)}")
             continue
         it, t = xbruns.to_tolerance(r, 1e-2)
-        S.add(claim, f"mgpbd outer iterations / time to 1e-2 ({tets(r)} tets, {m})", f"{p[0]} / {p[1]}",
-              f"{e(it)} / {e(t)} s", status_note(r))
-        S.add(claim, f"mgpbd relative dual residual at the end ({m})", p[2],
-              f"{e(float(r['data']['relative_dual_residual'][-1]))} at {int(r['data']['iteration'][-1])}")
+        summary.add(claim, f"mgpbd outer iterations / time to 1e-2 ({tets(r)} tets, {m})", f"{p[0]} / {p[1]}",
+              f"{fmt(it)} / {fmt(t)} s", status_note(r))
+        summary.add(claim, f"mgpbd relative dual residual at the end ({m})", p[2],
+              f"{fmt(float(r['data']['relative_dual_residual'][-1]))} at {int(r['data']['iteration'][-1])}")
     if not rx and not rm:
         if "squash_xpbd" not in notes and "squash_mgpbd" not in notes:
-            S.not_run(claim, "no results")
+            summary.not_run(claim, "no results")
         return
     import matplotlib
     matplotlib.use("Agg")
@@ -131,72 +103,72 @@ def claim_squash(S, files, notes, out):
     fig.suptitle("squash (frame 0): one-sweep XPBD against MGPBD")
     fig.tight_layout()
     xbruns.save(fig, os.path.join(out, "squash_residual.png"))
-    S.figures.append("squash_residual.png")
+    summary.figures.append("squash_residual.png")
 
 
-def claim_scaling(S, files, notes, out):
+def claim_scaling(summary, files, notes, out):
     claim = "time per outer iteration linear in size"
     runs = runs_of(files.get("scaling"), datasets=())
     if not runs:
-        S.not_run(claim, notes.get("scaling", "no results"))
+        summary.not_run(claim, notes.get("scaling", "no results"))
         return
     import scaling
     data = scaling.per_iteration(runs, "rows")
     for s, (n, t) in sorted(data.items()):
         if len(n) < 2:
-            S.add(claim, f"{s}: R² of the linear fit", "0.998", f"not run: only {len(n)} size(s) finished")
+            summary.add(claim, f"{s}: R² of the linear fit", "0.998", f"not run: only {len(n)} size(s) finished")
             continue
         k, b, r2 = xbruns.linear_fit(n, t)
-        S.add(claim, f"{s}: R² of t = a·tets + b over {len(n)} sizes ({int(n.min())}–{int(n.max())} tets)",
+        summary.add(claim, f"{s}: R² of t = a·tets + b over {len(n)} sizes ({int(n.min())}–{int(n.max())} tets)",
               "0.9978 (mgpbd)" if s == "mgpbd" else "—", f"{r2:.4f}")
-        S.add(claim, f"{s}: slope a / intercept b", "0.662 ms per 1K tets / 78.2 ms (RTX 4090)" if s == "mgpbd" else "—",
+        summary.add(claim, f"{s}: slope a / intercept b", "0.662 ms per 1K tets / 78.2 ms (RTX 4090)" if s == "mgpbd" else "—",
               f"{k * 1e3:.3g} ms per 1K / {b:.3g} ms (this CPU)")
     if "scaling" in notes:
-        S.add(claim, "inputs", "—", f"partly run: {notes['scaling']}")
-    plot(S, "scaling.py", files["scaling"], os.path.join(out, "scaling.png"))
+        summary.add(claim, "inputs", "—", f"partly run: {notes['scaling']}")
+    plot(summary, "scaling.py", files["scaling"], os.path.join(out, "scaling.png"))
 
 
-def claim_near_kernel(S, files, notes, out):
+def claim_near_kernel(summary, files, notes, out):
     claim = "near-kernel: 34 (B = 1) vs 18 (GS) PCG iterations"
     runs = runs_of(files.get("near_kernel"), datasets=DATA)
     if not runs:
-        S.not_run(claim, notes.get("near_kernel", "no results"))
+        summary.not_run(claim, notes.get("near_kernel", "no results"))
         return
     paper = {"ones": "34 (rel. res. 6.4e-7)", "gs": "— (adaptive SA: 20)", "gs_authors": "18 (rel. res. 7.9e-7)"}
     for r in runs:
         nk = r["attrs"].get("amg.near_kernel")
         if failed(r) or "linear_iterations" not in r["data"] or len(r["data"]["linear_iterations"]) < 2:
-            S.add(claim, f"PCG iterations, B = {nk}", paper.get(nk, "—"), f"not run: {status_note(r) or 'no solve'}")
+            summary.add(claim, f"PCG iterations, B = {nk}", paper.get(nk, "—"), f"not run: {status_note(r) or 'no solve'}")
             continue
-        S.add(claim, f"PCG iterations of the first solve, near_kernel = {nk} ({tets(r)} tets)", paper.get(nk, "—"),
-              f"{int(r['data']['linear_iterations'][1])} (rel. res. {e(float(r['data']['linear_relative_residual'][1]))})")
+        summary.add(claim, f"PCG iterations of the first solve, near_kernel = {nk} ({tets(r)} tets)", paper.get(nk, "—"),
+              f"{int(r['data']['linear_iterations'][1])} (rel. res. {fmt(float(r['data']['linear_relative_residual'][1]))})")
 
 
-def claim_setup_interval(S, files, notes, out):
+def claim_setup_interval(summary, files, notes, out):
     claim = "setup interval 1 → 100: residual after 100 its 1.03e-2 → 1.45e-2"
     runs = runs_of(files.get("setup_interval"), datasets=DATA)
     if not runs:
-        S.not_run(claim, notes.get("setup_interval", "no results"))
+        summary.not_run(claim, notes.get("setup_interval", "no results"))
         return
     paper = {1: "1.025e-2", 10: "1.219e-2", 20: "1.310e-2", 50: "1.404e-2", 100: "1.452e-2"}
     for r in sorted(runs, key=lambda r: int(r["attrs"].get("amg.setup_interval", 0))):
         k = int(r["attrs"].get("amg.setup_interval", 0))
         if failed(r):
-            S.add(claim, f"interval {k}", paper.get(k, "—"), f"not run: {status_note(r)}")
+            summary.add(claim, f"interval {k}", paper.get(k, "—"), f"not run: {status_note(r)}")
             continue
         fr, sub = last_substep(r)
         v = xbruns.value_at_iteration(r, "relative_dual_residual", 100, fr, sub)
-        S.add(claim, f"rel. dual residual after 100 its, frame {fr}, setup_interval = {k} ({tets(r)} tets)",
-              paper.get(k, "—"), e(v), status_note(r))
-    plot(S, "sweep.py", files["setup_interval"], os.path.join(out, "setup_interval.png"),
+        summary.add(claim, f"rel. dual residual after 100 its, frame {fr}, setup_interval = {k} ({tets(r)} tets)",
+              paper.get(k, "—"), fmt(v), status_note(r))
+    plot(summary, "sweep.py", files["setup_interval"], os.path.join(out, "setup_interval.png"),
          ["--metric", "relative_dual_residual"])
 
 
-def claim_twist(S, files, notes, out):
+def claim_twist(summary, files, notes, out):
     claim = "twist bar at 7e9: relative energy 0.03 (MGPBD) vs 0.75 (XPBD)"
     runs = runs_of(files.get("twist_bar"), datasets=DATA)
     if not runs:
-        S.not_run(claim, notes.get("twist_bar", "no results"))
+        summary.not_run(claim, notes.get("twist_bar", "no results"))
         return
     paper = {("mgpbd", 7e7): "0.695", ("mgpbd", 7e8): "0.253", ("mgpbd", 7e9): "0.0315",
              ("xpbd", 7e7): "0.639", ("xpbd", 7e8): "0.694", ("xpbd", 7e9): "0.749"}
@@ -209,14 +181,14 @@ def claim_twist(S, files, notes, out):
         mu, s = float(r["attrs"]["stiffness"]), r["attrs"]["solver"]
         pk = paper.get(("mgpbd" if s == "mgpbd" else "xpbd" if s.startswith("xpbd") else s, mu), "—")
         if failed(r) or "energy" not in r["data"]:
-            S.add(claim, f"{s}, μ = {mu:.0e}", pk, f"not run: {status_note(r)}")
+            summary.add(claim, f"{s}, μ = {mu:.0e}", pk, f"not run: {status_note(r)}")
             continue
         m = xbruns.substep_mask(r, 0, 0)
         en = np.asarray(r["data"]["energy"])[m]
         it = np.asarray(r["data"]["iteration"])[m]
         rel = en / en[0] if en[0] > 0 else en
         k = np.flatnonzero(it <= 100)[-1]
-        S.add(claim, f"{s}: E(it {int(it[k])}) / E(0), μ = {mu:.0e} ({tets(r)} tets)", pk, e(float(rel[k])),
+        summary.add(claim, f"{s}: E(it {int(it[k])}) / E(0), μ = {mu:.0e} ({tets(r)} tets)", pk, fmt(float(rel[k])),
               status_note(r))
         ax = axes[0][stiff.index(mu)]
         ax.semilogy(it, rel, label=s)
@@ -227,94 +199,94 @@ def claim_twist(S, files, notes, out):
         ax.legend(fontsize=8)
     fig.tight_layout()
     xbruns.save(fig, os.path.join(out, "twist_bar_energy.png"))
-    S.figures.append("twist_bar_energy.png")
+    summary.figures.append("twist_bar_energy.png")
 
 
-def claim_cloth(S, files, notes, out):
+def claim_cloth(summary, files, notes, out):
     claim = "hanging cloth: XPBD stretches at the same dual residual (Fig. 8)"
     runs = runs_of(files.get("cloth_stretch"), datasets=("final_positions", "distance_edges", "distance_rest_length"))
     if not runs:
-        S.not_run(claim, notes.get("cloth_stretch", "no results"))
+        summary.not_run(claim, notes.get("cloth_stretch", "no results"))
         return
     for r in runs:
         if failed(r):
-            S.add(claim, f"{r['attrs'].get('solver')} max strain", "—", f"not run: {status_note(r)}")
+            summary.add(claim, f"{r['attrs'].get('solver')} max strain", "—", f"not run: {status_note(r)}")
             continue
         s, _, _ = xbruns.cloth_strains(r)
         a = r["attrs"]
-        S.add(claim, f"{a.get('solver')}: max / mean edge strain (length/rest − 1) after {a.get('frames')} frames "
+        summary.add(claim, f"{a.get('solver')}: max / mean edge strain (length/rest − 1) after {a.get('frames')} frames "
                      f"({a.get('resolution')}², stop at dual residual {a.get('atol')})",
               "XPBD visibly stretched, global solve not", f"{s.max():.3g} / {s.mean():.3g}",
               f"{a.get('substeps_converged')}/{a.get('substeps_total')} substeps reached it; {a.get('status')}")
     if "cloth_stretch" in notes:
-        S.add(claim, "inputs", "—", f"partly run: {notes['cloth_stretch']}")
-    plot(S, "cloth_stretch.py", files["cloth_stretch"], os.path.join(out, "cloth_stretch.png"))
+        summary.add(claim, "inputs", "—", f"partly run: {notes['cloth_stretch']}")
+    plot(summary, "cloth_stretch.py", files["cloth_stretch"], os.path.join(out, "cloth_stretch.png"))
 
 
-def claim_sweeps(S, files, notes, out):
+def claim_sweeps(summary, files, notes, out):
     claim = "θ_s sweep and stiffness sweep"
     for key, axis in (("theta", "amg.strength_threshold"), ("stiffness", "stiffness")):
         runs = runs_of(files.get(key), datasets=DATA)
         if not runs:
-            S.not_run(claim, f"{key}: " + notes.get(key, "no results"))
+            summary.not_run(claim, f"{key}: " + notes.get(key, "no results"))
             continue
         for r in sorted(runs, key=lambda r: (r["attrs"]["solver"], float(r["attrs"].get(axis, 0)))):
             a = r["attrs"]
             if failed(r):
-                S.add(claim, f"{a['solver']}, {axis} = {e(float(a.get(axis)))}", "—", f"not run: {status_note(r)}")
+                summary.add(claim, f"{a['solver']}, {axis} = {fmt(float(a.get(axis)))}", "—", f"not run: {status_note(r)}")
                 continue
             i2, t2 = xbruns.to_tolerance(r, 1e-2)
             i4, t4 = xbruns.to_tolerance(r, 1e-4)
-            S.add(claim, f"{a['solver']}, {axis} = {e(float(a.get(axis)))}: its / time to 1e-2, to 1e-4 ({tets(r)} tets)",
+            summary.add(claim, f"{a['solver']}, {axis} = {fmt(float(a.get(axis)))}: its / time to 1e-2, to 1e-4 ({tets(r)} tets)",
                   "θ_s “small, e.g. 0.25”" if key == "theta" else "—",
-                  f"{e(i2)} / {e(t2)} s, {e(i4)} / {e(t4)} s", status_note(r))
+                  f"{fmt(i2)} / {fmt(t2)} s, {fmt(i4)} / {fmt(t4)} s", status_note(r))
         if key in notes:
-            S.add(claim, f"{key} inputs", "—", f"partly run: {notes[key]}")
+            summary.add(claim, f"{key} inputs", "—", f"partly run: {notes[key]}")
         for metric in ("iterations_to_tolerance", "time_to_tolerance"):
-            plot(S, "sweep.py", files[key], os.path.join(out, f"{key}_{metric}.png"), ["--metric", metric, "--tol", "1e-2"])
+            plot(summary, "sweep.py", files[key], os.path.join(out, f"{key}_{metric}.png"), ["--metric", metric, "--tol", "1e-2"])
         if key == "stiffness":
-            plot(S, "stability.py", files[key], os.path.join(out, "stiffness_stability.png"))
+            plot(summary, "stability.py", files[key], os.path.join(out, "stiffness_stability.png"))
 
 
-def claim_error_time(S, files, notes, out):
+def claim_error_time(summary, files, notes, out):
     claim = "error against run time (Pareto view; no paper number)"
     runs = runs_of(files.get("error_time"), datasets=DATA)
     if not runs:
-        S.not_run(claim, notes.get("error_time", "no results"))
+        summary.not_run(claim, notes.get("error_time", "no results"))
         return
     for r in runs:
         a = r["attrs"]
         if failed(r) or "position_error" not in r["data"]:
-            S.add(claim, f"{a.get('solver')}", "—", f"not run: {status_note(r)}")
+            summary.add(claim, f"{a.get('solver')}", "—", f"not run: {status_note(r)}")
             continue
         pe = np.asarray(r["data"]["position_error"])
         wt = np.asarray(r["data"]["wall_time"])
         hit = np.flatnonzero(pe <= 1e-3)
-        S.add(claim, f"{a.get('solver')}: time to position error 1e-3; final error ({tets(r)} tets)", "—",
-              f"{e(float(wt[hit[0]])) + ' s' if len(hit) else 'never'}; {e(float(pe[-1]))}",
-              f"reference reached {e(float(a.get('reference_dual_residual', math.nan)))} relative")
+        summary.add(claim, f"{a.get('solver')}: time to position error 1e-3; final error ({tets(r)} tets)", "—",
+              f"{fmt(float(wt[hit[0]])) + ' s' if len(hit) else 'never'}; {fmt(float(pe[-1]))}",
+              f"reference reached {fmt(float(a.get('reference_dual_residual', math.nan)))} relative")
     if "error_time" in notes:
-        S.add(claim, "inputs", "—", f"partly run: {notes['error_time']}")
-    plot(S, "error_time.py", files["error_time"], os.path.join(out, "error_time.png"))
+        summary.add(claim, "inputs", "—", f"partly run: {notes['error_time']}")
+    plot(summary, "error_time.py", files["error_time"], os.path.join(out, "error_time.png"))
 
 
-def claim_profiles(S, files, notes, out):
-    import profile_claims  # each claim under the authors' profile and under the true metric
-    profile_claims.claim(S, files, notes)
+def claim_profiles(summary, files, notes, out):
+    # each claim under the authors' profile and under the true metric
+    profile_claims.claim(summary, files, notes)
 
 
-def claim_dual_primal(S, files, notes, out):
+def claim_dual_primal(summary, files, notes, out):
     import dual_primal  # the claim's code lives in its own module (this one stays short)
-    dual_primal.claim(S, files, notes, out, GROUPS["dual_primal"])
+    dual_primal.claim(summary, files, notes, out, GROUPS["dual_primal"])
 
 
-def plot(S, script, results, out, extra=()):
+def plot(summary, script, results, out, extra=()):
     r = subprocess.run([sys.executable, os.path.join(HERE, script), results, "-o", out] + list(extra),
                        capture_output=True, text=True)
     if r.returncode == 0:
-        S.figures.append(os.path.basename(out))
+        summary.figures.append(os.path.basename(out))
     else:
-        S.add("figures", script, "—", f"not drawn: {(r.stderr.strip().splitlines() or ['?'])[-1]}")
+        summary.add("figures", script, "—", f"not drawn: {(r.stderr.strip().splitlines() or ['?'])[-1]}")
 
 
 # Every claim, in the order of summary.md.

@@ -16,10 +16,22 @@ ConstraintGraph constraint_graph(const Problem& prob) {
   return g;
 }
 
+const std::vector<std::string>& form_choices() {
+  static const std::vector<std::string> forms = {"dual", "primal", "auto"};
+  return forms;
+}
+
+void check_form(const std::string& form, const std::string& where) {
+  const auto& forms = form_choices();
+  if (std::find(forms.begin(), forms.end(), form) != forms.end()) return;
+  std::string valid;
+  for (const auto& f : forms) valid += (valid.empty() ? "" : ", ") + f;
+  throw Error(where + ": unknown form '" + form + "' (valid: " + valid + ")");
+}
+
 std::string resolve_form(const std::string& requested, const Eigen::VectorXd& alpha_tilde) {
+  check_form(requested, "form");
   if (requested == "dual") return "dual";
-  if (requested != "primal" && requested != "auto")
-    throw Error("form: unknown form '" + requested + "' (valid: dual, primal, auto)");
   long rigid = 0;
   for (long j = 0; j < alpha_tilde.size(); ++j) rigid += !(alpha_tilde[j] > 0);
   if (rigid == 0) return "primal";

@@ -36,6 +36,11 @@ ConstraintGraph constraint_graph(const Problem& prob);
 // Per constraint: ∂C/∂x of each of its (up to 4) particles, zero-padded.
 using Gradients = std::vector<std::array<Eigen::Vector3d, 4>>;
 
+// The forms of the linear step a run may ask for (the `form` key, --form): dual, primal, auto.
+const std::vector<std::string>& form_choices();
+// Throws xb::Error "WHERE: unknown form 'FORM' (valid: dual, primal, auto)" for a form not among them.
+void check_form(const std::string& form, const std::string& where);
+
 // "dual" or "primal" for a requested form (dual | primal | auto): auto is primal when every
 // α̃ > 0. Throws xb::Error for primal with a constraint of zero compliance.
 std::string resolve_form(const std::string& requested, const Eigen::VectorXd& alpha_tilde);

@@ -103,4 +103,11 @@ Vector diagonal(const SparseMatrix& A) {
   return d;
 }
 
+Vector inverse_diagonal(const SparseMatrix& A) {
+  Vector d = diagonal(A);
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < d.size(); ++i) d[i] = d[i] > 0 ? 1.0 / d[i] : 0.0;
+  return d;
+}
+
 }  // namespace xb

@@ -8,6 +8,10 @@
 
 namespace xb {
 
+// Loops shorter than this run on one thread: on coarse AMG levels (tens to hundreds of rows) and
+// in small colour classes a parallel region costs more than the work it splits.
+constexpr long kMinParallelRows = 2048;
+
 // Rows [lo, hi) of thread t of T for a CSR row pointer `outer` of n rows: contiguous blocks
 // holding about nnz/T non-zeros each.
 void row_block(const int* outer, int n, int t, int T, int& lo, int& hi);
@@ -35,5 +39,7 @@ void axpy(double a, const Vector& x, Vector& y);
 double cg_update(double alpha, const Vector& p, const Vector& Ap, Vector& x, Vector& r);
 // The diagonal of A (zero where a row has no diagonal entry).
 Vector diagonal(const SparseMatrix& A);
+// 1/A_ii (0 where A_ii ≤ 0: such a row is left alone rather than blown up).
+Vector inverse_diagonal(const SparseMatrix& A);
 
 }  // namespace xb

@@ -1,7 +1,7 @@
 // The LinearSolver interface: every global method of the harness (cholmod, cg, jacobi-pcg,
 // mgpbd, hypre, muelu) solves one SPD system through it — the dual A Δλ = b or the primal
-// K Δx = f (harness/sim/global_step.hpp). Solvers see only a CSR matrix, its block size, an
-// optional near-kernel basis and vectors.
+// K Δx = f (harness/sim/simulation.cpp, harness/sim/primal_solve.hpp). Solvers see only a CSR
+// matrix, its block size, an optional near-kernel basis and vectors.
 #pragma once
 
 #include "../core/sparse.hpp"

@@ -5,7 +5,9 @@
   solvers/ or harness/; nothing under solvers/ includes harness/ or a scene header;
 - harness sub-layers: perf/ → cli/ → sim/ → io/ → the parameters (harness/*.hpp): each includes
   only the sub-layers after it;
-- size: no C++ source or header over 400 lines, no function body over 80 lines.
+- size: no C++ source or header and no Python file over 400 lines, no C++ function body over 80 lines;
+- no include loops: a unit (NAME.hpp with NAME.cpp) never reaches itself through the includes;
+- tests mirror the source: every .cpp under a folder of MIRRORED has tests/<folder>/test_<name>.cpp.
 
 usage: python3 tests/test_layout.py [--root DIR] [--report]   (--report lists, never fails)
 """
@@ -28,6 +30,8 @@ FORBIDDEN = {
     "harness/cli": ["harness/perf/"],
     "harness/": ["harness/io/", "harness/sim/", "harness/cli/", "harness/perf/"],
 }
+# folders (with their sub-folders) whose every source has a test of its name at the mirror path
+MIRRORED = ["solvers/amg"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 
 
@@ -37,6 +41,14 @@ def sources(root):
             for f in sorted(files):
                 if f.endswith((".cpp", ".hpp")):
                     yield os.path.join(d, f)
+
+
+def python_files(root):
+    for d, dirs, files in os.walk(root):
+        dirs[:] = [x for x in dirs if not x.startswith(".") and x != "build" and not x.startswith("build-")]
+        for f in sorted(files):
+            if f.endswith(".py"):
+                yield os.path.join(d, f)
 
 
 def layer_violations(root, path):
@@ -57,6 +69,74 @@ def layer_violations(root, path):
                 for bad in FORBIDDEN.get(layer, []):
                     if target.replace(os.sep, "/").startswith(bad):
                         out.append(f"{rel}:{n}: includes {m.group(1)} ({layer.rstrip('/')}/ must not include {bad})")
+    return out
+
+
+def include_loops(root, paths):
+    """Units (a path without .hpp/.cpp) whose includes lead back to themselves, one line per loop."""
+    graph = {}
+    for path in paths:
+        unit = os.path.splitext(os.path.relpath(path, root))[0]
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                m = INCLUDE.match(line)
+                if not m:
+                    continue
+                target = os.path.normpath(os.path.join(os.path.dirname(path), m.group(1)))
+                if not os.path.exists(target):
+                    target = os.path.join(root, m.group(1))
+                other = os.path.splitext(os.path.relpath(target, root))[0]
+                if other != unit:
+                    graph.setdefault(unit, set()).add(other)
+    # strongly connected components (Tarjan, iterative)
+    index, low, on_stack, stack, loops, counter = {}, {}, set(), [], [], [0]
+    for start in sorted(graph):
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph.get(start, ()))))]
+        index[start] = low[start] = counter[0]
+        counter[0] += 1
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = counter[0]
+                    counter[0] += 1
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph.get(w, ())))))
+                elif w in on_stack:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on_stack.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    loops.append("include loop: " + " <-> ".join(sorted(comp)))
+    return loops
+
+
+def missing_tests(root):
+    out = []
+    for folder in MIRRORED:
+        for d, _, files in os.walk(os.path.join(root, folder)):
+            for f in sorted(files):
+                if f.endswith(".cpp"):
+                    rel = os.path.relpath(os.path.join(d, f), root)
+                    test = os.path.join("tests", os.path.dirname(rel), "test_" + f)
+                    if not os.path.exists(os.path.join(root, test)):
+                        out.append(f"{rel}: no test of its name ({test})")
     return out
 
 
@@ -99,11 +179,16 @@ def main():
     ap.add_argument("--report", action="store_true")
     a = ap.parse_args()
     problems = []
-    for path in sources(a.root):
+    paths = list(sources(a.root))
+    problems += include_loops(a.root, [p for p in paths if not os.path.relpath(p, a.root).startswith("tests")])
+    problems += missing_tests(a.root)
+    for path in paths + list(python_files(a.root)):
         with open(path, encoding="utf-8") as fh:
             n = sum(1 for _ in fh)
         if n > MAX_FILE_LINES:
             problems.append(f"{os.path.relpath(path, a.root)}: {n} lines (limit {MAX_FILE_LINES})")
+        if path.endswith(".py"):
+            continue
         problems += layer_violations(a.root, path)
         problems += long_functions(a.root, path)
     for p in problems:

@@ -54,7 +54,7 @@ int cmd_run(const CommandArgs& argv) {
   if (args.has("--variant")) sets.push_back("variant=" + args.get("--variant"));  // explicit --set keys win
   if (args.has("--frames")) sets.push_back("frames=" + args.get("--frames"));
   for (const auto& s : args.all("--set")) sets.push_back(s);
-  // State checkpoints (harness/state_io.hpp): save after frame F (frames raised to F + 1).
+  // State checkpoints (harness/io/state_io.hpp): save after frame F (frames raised to F + 1).
   const std::string save_state = args.get("--save-state", "");
   int state_frame = -1;
   if (args.has("--frame-of-state") != !save_state.empty())

@@ -4,6 +4,7 @@
 #include "profile.hpp"
 
 #include "../../core/error.hpp"
+#include "../../problems/primal_system.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/mpi/distributed.hpp"
 #include "../../solvers/linear_solver.hpp"
@@ -60,7 +61,7 @@ std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, cons
   std::vector<std::string> forms;
   std::stringstream ss(form_list);
   for (std::string f; std::getline(ss, f, ',');) {
-    if (f != "dual" && f != "primal" && f != "auto") throw Error("--form: unknown form '" + f + "' (valid: dual, primal, auto)");
+    check_form(f, "--form");
     forms.push_back(f);
   }
   if (forms.empty()) forms.push_back("");

@@ -14,7 +14,7 @@ class Args;
 // The longest one run may take, in s, unless --time-budget says otherwise (0 = no limit): generous,
 // but a run asked for 1e9 iterations or frames ends with status `timeout` instead of never.
 constexpr double default_time_budget = 3600;
-// The parameter `frames` is at most this (problems/params.cpp), so frame numbers are below it.
+// The parameter `frames` is at most this (problems/scene_settings.cpp), so frame numbers are below it.
 constexpr int max_frames = 1000000000;
 // --time-budget S of `command` (>= 0), or default_time_budget.
 double time_budget_flag(const Args& args, const std::string& command);

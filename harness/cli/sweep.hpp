@@ -1,6 +1,6 @@
 // Sweep specs: a base scene, solvers, fixed overrides and a grid of any parameter key, expanded
 // into one job per (grid point × solver × repeat). Each job carries a canonical key so that a
-// rerun of the same sweep into the same file skips what is already there (harness/cmd_sweep.cpp).
+// rerun of the same sweep into the same file skips what is already there (harness/cli/cmd_sweep.cpp).
 //
 //   scene = "bar_hang"                  # built-in name or a .toml path (relative to the spec)
 //   solvers = ["mgpbd", "cholmod"]

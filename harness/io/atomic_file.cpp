@@ -42,4 +42,26 @@ void TmpFile::commit() {
   fsync_path(parent.empty() ? "." : parent.string());
 }
 
+void make_parent(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) fs::create_directories(parent, ec);
+}
+
+void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body) {
+  make_parent(path);
+  TmpFile tmp(path);
+  std::FILE* f = std::fopen(tmp.path().c_str(), "w");
+  if (!f) throw Error("cannot create " + tmp.path());
+  try {
+    body(f);
+  } catch (...) {
+    std::fclose(f);
+    throw;
+  }
+  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  if (std::fclose(f) != 0 || !ok) throw Error("cannot write " + tmp.path());
+  tmp.commit();
+}
+
 }  // namespace xb

@@ -4,6 +4,8 @@
 // from the writer, a failed rename).
 #pragma once
 
+#include <cstdio>
+#include <functional>
 #include <string>
 
 namespace xb {
@@ -22,5 +24,10 @@ class TmpFile {
   std::string path_, tmp_;
   bool committed_ = false;
 };
+
+// Creates PATH's folder if it is missing (errors are left to the write that follows).
+void make_parent(const std::string& path);
+// Writes a text file through PATH.tmp (written by `body`, checked, renamed over PATH). Throws xb::Error.
+void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body);
 
 }  // namespace xb

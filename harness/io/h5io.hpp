@@ -2,7 +2,7 @@
 // checked calls, and scalar attributes / 1-D datasets of the recorder's value types.
 #pragma once
 
-#include "recorder.hpp"
+#include "record.hpp"
 
 #include <hdf5.h>
 

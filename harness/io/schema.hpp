@@ -6,7 +6,7 @@
 // attributes of every run as well (harness/params.hpp).
 #pragma once
 
-#include "recorder.hpp"
+#include "record.hpp"
 
 #include <string>
 #include <vector>

@@ -14,7 +14,8 @@
 // Every file is written to NAME.tmp and renamed, so a failed capture leaves no partial file.
 #pragma once
 
-#include "recorder.hpp"
+#include "matrix_market.hpp"
+#include "record.hpp"
 
 #include "../../problems/primal_system.hpp"
 #include "../../core/sparse.hpp"
@@ -48,14 +49,6 @@ void write_system_h5(const std::string& path, const CapturedSystem& sys);
 // Reads a file written by write_system_h5; throws xb::Error naming the file and what is wrong
 // (missing, not HDF5, not a captured system, inconsistent CSR arrays).
 CapturedSystem read_system_h5(const std::string& path);
-
-// Matrix Market: A must be symmetric (only its lower triangle is written).
-void write_matrix_market(const std::string& path, const SparseMatrix& A);
-void write_matrix_market(const std::string& path, const Vector& b);
-// Reads "coordinate real {symmetric|general}" into a full CSR matrix.
-SparseMatrix read_matrix_market_matrix(const std::string& path);
-// Reads "array real general" with one column.
-Vector read_matrix_market_vector(const std::string& path);
 
 // Writes PREFIX.h5, PREFIX_A.mtx and PREFIX_b.mtx, and PREFIX_K.mtx and PREFIX_f.mtx when the
 // system has its primal data and every α̃ > 0. Returns the paths written.

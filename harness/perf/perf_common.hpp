@@ -24,7 +24,7 @@ struct LabelledSystem : CapturedSystem {
   std::string label;
 };
 
-// xb::capture_system (harness/capture.hpp) on a case, substep 0; p.max_iterations is raised to
+// xb::capture_system (harness/sim/capture.hpp) on a case, substep 0; p.max_iterations is raised to
 // reach the iteration.
 LabelledSystem capture_case(const SceneCase& c, int frame, int iteration, const std::vector<std::string>& extra_sets,
                             const std::string& driver = "cholmod");

@@ -1,6 +1,6 @@
 #include "block_kernels.hpp"
 
-#include "relaxation/smoothers.hpp"
+#include "../kernels.hpp"
 
 #include <algorithm>
 

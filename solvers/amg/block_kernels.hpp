@@ -8,7 +8,6 @@
 #pragma once
 
 #include "block_sparse.hpp"
-#include "relaxation/diagonal_relaxation.hpp"
 
 namespace xb::amg {
 

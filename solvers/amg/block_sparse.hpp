@@ -8,7 +8,8 @@
 // Products sum in the scalar spgemm's order, so their values are the same to round-off.
 #pragma once
 
-#include "nodal.hpp"
+#include "node_layout.hpp"
+#include "../../core/sparse.hpp"
 
 #include <vector>
 

@@ -2,7 +2,7 @@
 
 #include "../../core/error.hpp"
 #include "../kernels.hpp"
-#include "relaxation/smoothers.hpp"
+#include "relaxation/gauss_seidel.hpp"
 
 #include <cmath>
 #include <random>

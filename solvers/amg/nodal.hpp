@@ -10,20 +10,13 @@
 #pragma once
 
 #include "aggregation.hpp"
+#include "node_layout.hpp"
 
 #include <vector>
 
 namespace xb::amg {
 
 struct BlockPattern;
-
-// node_start[I] … node_start[I+1]−1 are node I's rows. Empty means "scalar" (one row per node).
-struct NodeLayout {
-  std::vector<int> node_start;
-  bool scalar() const { return node_start.empty(); }
-  int num_nodes() const { return static_cast<int>(node_start.size()) - 1; }
-  static NodeLayout uniform(int rows, int block_size);
-};
 
 // The node matrix: entry (I, J) = Frobenius norm of A's block (I, J) (stored entries only).
 // Throws xb::Error if the layout does not cover A's rows.

@@ -5,6 +5,7 @@
 #include "block_sparse.hpp"
 #include "galerkin.hpp"
 #include "relaxation/block_diagonal.hpp"
+#include "relaxation/lanczos.hpp"
 #include "relaxation/smoothers.hpp"
 
 #include <algorithm>

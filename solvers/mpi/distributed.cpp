@@ -15,74 +15,8 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
-#include <numeric>
 
 namespace xb {
-
-namespace {
-// main() initialises MPI; library users without it (the unit tests) get it on first use,
-// finalised at exit.
-void ensure_mpi() {
-  int init = 0;
-  MPI_Initialized(&init);
-  if (init) return;
-  MPI_Init(nullptr, nullptr);
-  std::atexit([] {
-    int fin = 0;
-    MPI_Finalized(&fin);
-    if (fin) return;
-    finalize_external_libraries();
-    MPI_Finalize();
-  });
-}
-}  // namespace
-
-int mpi_rank() {
-  ensure_mpi();
-  int r = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &r);
-  return r;
-}
-
-int mpi_size() {
-  ensure_mpi();
-  int s = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &s);
-  return s;
-}
-
-std::vector<long long> contiguous_rows(long long n, int nranks, int block_size) {
-  if (block_size < 1 || n % block_size)
-    throw Error(std::to_string(n) + " rows are not a whole number of blocks of " + std::to_string(block_size));
-  const long long nodes = n / block_size;
-  std::vector<long long> off(nranks + 1);
-  for (int r = 0; r <= nranks; ++r) off[r] = block_size * (nodes * r / nranks);
-  return off;
-}
-
-void DistributedKernel::record_setup(const std::string& action, bool full) {
-  action_ = action;
-  ++(full ? full_setups_ : reused_setups_);
-}
-
-void DistributedKernel::record_levels(std::vector<double> rows, std::vector<double> nnz) {
-  level_rows_ = std::move(rows);
-  level_nnz_ = std::move(nnz);
-}
-
-std::map<std::string, double> DistributedKernel::statistics() const {
-  const auto sum = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); };
-  const bool any = !level_rows_.empty() && level_rows_[0] > 0 && level_nnz_[0] > 0;
-  return {{"levels", static_cast<double>(level_rows_.size())},
-          {"operator_complexity", any ? sum(level_nnz_) / level_nnz_[0] : 0},
-          {"grid_complexity", any ? sum(level_rows_) / level_rows_[0] : 0},
-          {"setup_full", static_cast<double>(full_setups_)},
-          {"setup_reused", static_cast<double>(reused_setups_)}};
-}
-
-std::map<std::string, std::vector<double>> DistributedKernel::array_statistics() const {
-  return {{"level_rows", level_rows_}, {"level_nnz", level_nnz_}};
-}
 
 namespace {
 
@@ -334,14 +268,5 @@ void stop_workers() {
   bcast_header(h);
 }
 
-#ifdef XB_WITH_MUELU
-void finalize_muelu_runtime();
-#endif
-
-void finalize_external_libraries() {
-#ifdef XB_WITH_MUELU
-  finalize_muelu_runtime();
-#endif
-}
 
 }  // namespace xb

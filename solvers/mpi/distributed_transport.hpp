@@ -2,7 +2,9 @@
 // distributed.cpp): command headers, SolverSettings, row blocks with their near-kernel rows, vectors.
 #pragma once
 
-#include "distributed.hpp"
+#include "partition.hpp"
+#include "../../core/sparse.hpp"
+#include "../solver_settings.hpp"
 
 #include <string>
 #include <vector>

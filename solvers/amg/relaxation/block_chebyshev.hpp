@@ -7,7 +7,9 @@
 #pragma once
 
 #include "block_diagonal.hpp"
-#include "smoothers.hpp"
+#include "smoother.hpp"
+
+#include <memory>
 
 namespace xb::amg {
 

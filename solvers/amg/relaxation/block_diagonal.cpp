@@ -4,7 +4,6 @@
 
 #include "../../../core/error.hpp"
 #include "../../kernels.hpp"
-#include "smoothers.hpp"
 
 #include <Eigen/Eigenvalues>
 

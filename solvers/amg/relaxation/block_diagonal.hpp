@@ -4,7 +4,8 @@
 // block is far from diagonal (stretched tets, cloth edges at an angle to the axes).
 #pragma once
 
-#include "../nodal.hpp"
+#include "../node_layout.hpp"
+#include "../../../core/sparse.hpp"
 
 #include <vector>
 

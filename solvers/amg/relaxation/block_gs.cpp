@@ -1,5 +1,8 @@
 #include "block_gs.hpp"
 
+#include "../nodal.hpp"
+#include "../../kernels.hpp"
+
 #include <algorithm>
 #include <vector>
 

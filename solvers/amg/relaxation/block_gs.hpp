@@ -8,7 +8,8 @@
 #pragma once
 
 #include "block_diagonal.hpp"
-#include "smoothers.hpp"
+#include "../../coloring.hpp"
+#include "smoother.hpp"
 
 namespace xb::amg {
 

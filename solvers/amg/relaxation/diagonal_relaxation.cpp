@@ -2,7 +2,6 @@
 
 #include "../../kernels.hpp"
 #include "../block_kernels.hpp"
-#include "smoothers.hpp"
 
 #include <omp.h>
 

@@ -14,11 +14,6 @@ namespace xb::amg {
 struct BlockOperator;
 
 template <class S>
-using CsrOf = Eigen::SparseMatrix<S, Eigen::RowMajor, int>;
-template <class S>
-using VectorOf = Eigen::Matrix<S, Eigen::Dynamic, 1>;
-
-template <class S>
 struct DiagonalRelaxation {
   bool chebyshev = true;  // false: jacobi
   int sweeps = 1;

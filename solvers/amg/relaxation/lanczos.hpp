@@ -3,11 +3,12 @@
 #pragma once
 
 #include "../../../core/sparse.hpp"
-#include "../block_kernels.hpp"
 
 #include <functional>
 
 namespace xb::amg {
+
+struct BlockOperator;
 
 // ‖x‖_D.
 using DNorm = std::function<double(const Vector& x)>;
@@ -22,5 +23,11 @@ using LanczosStep =
 // eigenproblem fails. blocks: A's node blocks, for its products (block_kernels.hpp), or null.
 double lanczos_lambda_max(const SparseMatrix& A, Vector& v, int iterations, unsigned seed, const DNorm& dnorm,
                           const LanczosStep& step, const BlockOperator* blocks = nullptr);
+
+// Upper estimate of λ_max(D⁻¹A) (A SPD): max(iterations, 10) Lanczos steps from v, largest Ritz
+// value plus its residual bound, capped by Gershgorin's bound (v is updated to start the next
+// estimate; a zero or wrongly sized v is replaced by a seeded random vector).
+double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector& v, int iterations,
+                           unsigned seed = 1);
 
 }  // namespace xb::amg

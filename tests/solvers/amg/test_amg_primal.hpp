@@ -66,4 +66,14 @@ inline LinearStats solve_k(const PrimalCase& c, const Params& p, const std::stri
   return s->solve(c.f, x);
 }
 
+// A small bar (stretched ARAP tets, one end pinned) and a small sagging cloth.
+inline const PrimalCase& small_bar() {
+  static const auto c = primal_case("bar_hang", {{"resolution", "3"}, {"aspect", "3"}}, 1, 0);
+  return c;
+}
+inline const PrimalCase& small_cloth() {
+  static const auto c = primal_case("cloth_hang", {{"resolution", "12"}}, 3, 0);
+  return c;
+}
+
 }  // namespace xb::test

@@ -6,10 +6,10 @@
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/kernels.hpp"
 #include "core/error.hpp"
-#include "test_amg_primal.hpp"
+#include "../test_amg_primal.hpp"
 
 #include <Eigen/SparseCholesky>
-#include "amg_test_support.hpp"
+#include "../amg_test_support.hpp"
 
 #include <gtest/gtest.h>
 

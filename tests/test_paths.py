@@ -1,0 +1,90 @@
+#!/usr/bin/env python3
+"""Every repository path named in a comment or a doc exists (a ctest).
+
+Reads the comments of C++ and Python files and every Markdown file; a token that looks like a
+path under one of the project's folders (core/, problems/, solvers/, harness/, ..., or a path
+relative to the file's own folder) must name a file or folder that exists. Placeholders (an
+upper-case word such as NAME or X, `...`), generated outputs (GENERATED) and the shared folder
+outside the repository (shared/) are not checked.
+
+usage: python3 tests/test_paths.py [--root DIR]
+"""
+import argparse
+import os
+import re
+import sys
+
+PATH = re.compile(r"(?<![\w./-])((?:\.\./|\./)?(?:[\w.-]+/)+[\w.-]+\.(?:hpp|cpp|py|md|toml|json|sh|txt|tsv))\b")
+TOPS = {"core", "problems", "solvers", "harness", "bench", "tests", "plots", "scripts", "figures", "docs", "results",
+        "fuzz", ".ci"}
+# written by a command, not tracked
+GENERATED = ("plots/figures/", "results/perf/", "results/forms/")
+# snapshots of generated pages: they name what ran then
+SNAPSHOTS = {"docs/figures_summary.md"}
+
+
+def comment_lines(path, text):
+    """(line number, text) of the lines a reader takes as prose: all of a Markdown file, the
+    comments of C++ and Python (not #include lines)."""
+    for n, line in enumerate(text.split("\n"), 1):
+        if path.endswith(".md"):
+            yield n, line
+        elif path.endswith(".py"):
+            if "#" in line or '"""' in line or not line.startswith((" ", "\t")) or line.strip().startswith(("-", "usage")):
+                yield n, line
+        elif "//" in line:
+            yield n, line[line.index("//"):]
+
+
+def broken(root, path):
+    rel = os.path.relpath(path, root)
+    if rel in SNAPSHOTS:
+        return []
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        text = fh.read()
+    out = []
+    for n, line in comment_lines(path, text):
+        for m in PATH.finditer(line):
+            p = m.group(1)
+            if re.search(r"\b[A-Z]{1,}\b(?=[./])|\.\.\.|[*{<$]", p) or p.startswith(("shared/", "../shared/")):
+                continue
+            if p.startswith(GENERATED):
+                continue
+            here = os.path.normpath(os.path.join(os.path.dirname(path), p))
+            if p.split("/")[0] in TOPS:
+                ok = os.path.exists(os.path.join(root, p)) or os.path.exists(here)
+            elif p.startswith("."):
+                ok = os.path.exists(here)
+            else:
+                # relative to a folder above the file (e.g. "sim/capture.cpp" inside harness/): checked
+                # only where the first folder exists there, so prose like "a/b.py" is not read as a path
+                parts = rel.split(os.sep)
+                bases = [os.path.join(root, *parts[:k]) for k in range(len(parts))]
+                first = p.split("/")[0]
+                placed = [b for b in bases if os.path.isdir(os.path.join(b, first))]
+                if not placed:
+                    continue
+                ok = any(os.path.exists(os.path.join(b, p)) for b in placed)
+            if not ok:
+                out.append(f"{rel}:{n}: names {p}, which does not exist")
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--root", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    a = ap.parse_args()
+    problems = []
+    for d, dirs, files in os.walk(a.root):
+        dirs[:] = sorted(x for x in dirs if not x.startswith(".") and not x.startswith("build") and x != "shared")
+        for f in sorted(files):
+            if f.endswith((".cpp", ".hpp", ".py", ".md")):
+                problems += broken(a.root, os.path.join(d, f))
+    for p in problems:
+        print(p)
+    print(f"paths: {len(problems)} problem(s)")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
