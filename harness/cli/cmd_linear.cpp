@@ -24,6 +24,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <new>
 #include <set>
 
 namespace fs = std::filesystem;
@@ -217,6 +218,10 @@ SolveOutcome solve_one(const CapturedSystem& sys, const std::string& name, const
     }
     o.status = o.st.status == LinearStatus::converged ? "ok" : to_string(o.st.status);
     o.message = o.st.message;
+  } catch (const std::bad_alloc&) {
+    o.status = "error";
+    o.message = "out of memory in the " + std::string(std::isnan(o.setup_time) ? "setup" : "solve") + " of " + name +
+                " (" + form + " form)";
   } catch (const std::exception& e) {
     o.status = "error";
     o.message = e.what();

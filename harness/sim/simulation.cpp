@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <new>
 #include <optional>
 
 namespace xb {
@@ -89,6 +90,9 @@ class Simulation {
   ConstraintState state_, trial_state_;
   Eigen::Matrix3Xd x_trial_;
   bool first_setup_ = true, stop_ = false, any_max_iterations_ = false;
+  // Where the run is, for an out-of-memory message (std::bad_alloc says nothing).
+  std::string phase_ = "the set-up of the run";
+  int frame_ = 0, iteration_ = 0;
 };
 
 Simulation::Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt)
@@ -131,6 +135,9 @@ RunResult Simulation::run() {
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
       if (!stop_ && opt_.on_state) opt_.on_state(SimState{frame + 1, prob_.particles.x, prob_.particles.v});
     }
+  } catch (const std::bad_alloc&) {
+    fail("error", "out of memory in " + phase_ + " at frame " + std::to_string(frame_) + ", iteration " +
+                      std::to_string(iteration_));
   } catch (const std::exception& e) {
     fail("error", e.what());
   }
@@ -176,6 +183,9 @@ void Simulation::substep(int frame, int sub) {
   LastStep last;
   const bool authors_stop = p_.residual_metric == "authors";
   for (int it = 0;; ++it) {
+    frame_ = frame;
+    iteration_ = it;
+    phase_ = "the constraint evaluation";
     const Residuals r = log_state(frame, sub, it, last, r0);
     const double dual = r.dual;
     const double stop_metric = authors_stop ? r.authors : dual;  // r0 is the same for both
@@ -269,6 +279,7 @@ bool Simulation::step(int frame, int sub, int it, double residual, LastStep& las
     return true;
   }
   if (!primal_ || opt_.on_system) {  // the primal form fills K instead (capture needs A too)
+    phase_ = "the fill of A";
     Timer fill_clock;
     ds_.fill(state_, alpha_tilde_);
     last.fill = fill_clock.seconds();
@@ -285,14 +296,15 @@ bool Simulation::step(int frame, int sub, int it, double residual, LastStep& las
     primal_->set_tolerance(last.tolerance);
   else
     solver_->set_tolerance(last.tolerance);
-  if (primal_) {
+  phase_ = "the setup of " + method_ + (primal_ ? " (primal form, K's fill included)" : "");
+  if (primal_)
     primal_->setup(state_.grad, alpha_tilde_, P.x, kind, SetupContext{frame, sub, it});
-    last.fill = primal_->fill_time();
-    last.linear = primal_->solve(b_, dlambda_);
-  } else {
+  else
     solver_->setup(ds_.A(), kind, SetupContext{frame, sub, it});
-    last.linear = solver_->solve(b_, dlambda_);
-  }
+  if (primal_) last.fill = primal_->fill_time();
+  phase_ = "the solve of " + method_;
+  last.linear = primal_ ? primal_->solve(b_, dlambda_) : solver_->solve(b_, dlambda_);
+  phase_ = "the step";
   last.action = active_->last_setup_action();
   if (last.linear.status == LinearStatus::breakdown) {
     fail("breakdown", "linear solver " + method_ + " broke down at frame " + std::to_string(frame) + ", iteration " +
@@ -359,7 +371,14 @@ RunResult run_simulation(const Problem& prob, const Params& p, const std::string
   if (!info) (void)make_linear_solver(method, p);  // throws with the valid names
   if (!info->available) throw Error("solver '" + method + "' is not available: " + info->reason);
   if (p.threads > 0) omp_set_num_threads(p.threads);
-  return Simulation(prob, p, method, opt).run();
+  try {
+    return Simulation(prob, p, method, opt).run();
+  } catch (const std::bad_alloc&) {  // the run's copies of the problem and its systems
+    RunResult r;
+    r.status = "error";
+    r.message = "out of memory in the set-up of the run (" + method + ": the problem's copy, A's pattern, the solver)";
+    return r;
+  }
 }
 
 }  // namespace xb

@@ -17,6 +17,7 @@
 #include <cholmod.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace xb {
 
@@ -110,7 +111,9 @@ class CholmodSolver final : public LinearSolver {
   void factorise(const char* action) {
     Timer t;
     factor_ok_ = L_ && cholmod_factorize(&view_, L_, &c_) && c_.status == CHOLMOD_OK;
-    if (!L_)
+    if (c_.status == CHOLMOD_OUT_OF_MEMORY)
+      message_ = out_of_memory();
+    else if (!L_)
       message_ = "CHOLMOD analysis failed";
     else if (c_.status == CHOLMOD_NOT_POSDEF)
       message_ = "matrix not positive definite (CHOLMOD failed at column " + std::to_string(L_->minor) + ")";
@@ -120,6 +123,15 @@ class CholmodSolver final : public LinearSolver {
     action_ = action;
     ++factorisations_;
     factorise_time_ += t.seconds();
+  }
+
+  // Where CHOLMOD ran out of memory, with the factor's size where the analysis got that far.
+  std::string out_of_memory() const {
+    if (!L_) return "out of memory in CHOLMOD's analysis of a " + std::to_string(view_.nrow) + "-row matrix";
+    char mb[32];
+    std::snprintf(mb, sizeof mb, "%.0f", c_.lnz * (sizeof(double) + sizeof(int)) / 1e6);
+    return "out of memory in CHOLMOD's factorisation: the factor needs " + std::to_string(static_cast<long long>(c_.lnz)) +
+           " non-zeros (about " + mb + " MB)";
   }
 
   // x = L⁻ᵀL⁻¹ b with the current factor; false if CHOLMOD failed.

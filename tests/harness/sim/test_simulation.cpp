@@ -6,6 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
 #include <random>
 
 using namespace xb;
@@ -116,4 +122,33 @@ TEST(LinearSolvers, CholmodReportsSingularAsBreakdown) {
   const RunResult r = run_simulation(prob, p, "cholmod");
   EXPECT_EQ(r.status, "breakdown");
   EXPECT_NE(r.message.find("positive definite"), std::string::npos) << r.message;
+}
+
+// Out of memory in a run is its status `error` saying "out of memory" and in which step, never a
+// std::bad_alloc. In a child process whose address space is capped a little above what it has
+// mapped, one thread (no OpenMP thread to start), the run's first large allocations fail.
+TEST(Simulation, OutOfMemoryIsAnErrorSayingWhere) {
+  Params p;
+  p.scene = "cloth_hang";
+  p.resolution = 160;
+  p.threads = 1;
+  p.max_iterations = 2;
+  const Problem prob = build_problem(p);
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    long pages = 0;
+    std::ifstream("/proc/self/statm") >> pages;
+    const rlim_t mapped = static_cast<rlim_t>(pages) * static_cast<rlim_t>(::sysconf(_SC_PAGESIZE));
+    const rlimit cap{mapped + (rlim_t{24} << 20), mapped + (rlim_t{24} << 20)};
+    if (::setrlimit(RLIMIT_AS, &cap) != 0) ::_exit(3);
+    const RunResult r = run_simulation(prob, p, "mgpbd");
+    std::fprintf(stderr, "status %s: %s\n", r.status.c_str(), r.message.c_str());
+    ::_exit(r.status == "error" && r.message.rfind("out of memory in ", 0) == 0 ? 0 : 1);
+  }
+  int st = 0;
+  ASSERT_EQ(::waitpid(pid, &st, 0), pid);
+  ASSERT_TRUE(WIFEXITED(st)) << "the child crashed (signal " << (WIFSIGNALED(st) ? WTERMSIG(st) : 0) << ")";
+  EXPECT_EQ(WEXITSTATUS(st), 0) << "see the child's status line above";
 }

@@ -8,8 +8,10 @@
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"
 
+#include <SuiteSparse_config.h>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <random>
 
 using namespace xb;
@@ -136,4 +138,30 @@ TEST(CholmodLagged, PrimalSolveWithAnOldFactorMeetsTheDualTolerance) {
       EXPECT_LE((dl - ref).norm(), 1e-5 * ref.norm());
     }
   }
+}
+
+// Out of memory reads as such, with the step and the factor's size, not as a status code. Every
+// SuiteSparse allocation above 256 KB fails here (the cloth's factor is larger).
+namespace {
+void* small_malloc_only(size_t n) { return n > (size_t{1} << 18) ? nullptr : std::malloc(n); }
+}  // namespace
+
+TEST(Cholmod, OutOfMemorySaysSoWithTheFactorsSize) {
+  Params p;
+  p.scene = "cloth_hang";
+  p.resolution = 48;
+  const Problem prob = build_problem(p);
+  DualSystem ds(prob);
+  ConstraintState s;
+  evaluate_constraints(prob, prob.particles.x, s);
+  ds.fill(s, scaled_compliance(prob, p.dt));
+  auto solver = make_linear_solver("cholmod", p);
+  void* (*saved)(size_t) = SuiteSparse_config.malloc_func;
+  SuiteSparse_config.malloc_func = small_malloc_only;
+  solver->setup(ds.A(), SetupKind::Structure, {});
+  SuiteSparse_config.malloc_func = saved;
+  Vector x;
+  const LinearStats st = solver->solve(-s.C, x);
+  EXPECT_EQ(st.status, LinearStatus::breakdown);
+  EXPECT_NE(st.message.find("out of memory in CHOLMOD's"), std::string::npos) << st.message;
 }
