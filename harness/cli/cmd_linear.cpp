@@ -90,7 +90,7 @@ void check_capture_outputs(const std::string& prefix, const std::string& scene, 
 
 int cmd_capture(const CommandArgs& argv) {
   Args args("capture", argv,
-            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}, {"--time-budget"}});
+            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}, {"--time-budget"}, {"--quiet", false}});
   // Everything is checked before anything runs or is written.
   const std::string scene = args.require("--scene");
   const std::string prefix = strip_h5(args.require("--out"));
@@ -262,7 +262,7 @@ void record_outcome(RunRecord& r, SolveOutcome o, const DirectReference& ref, co
 }  // namespace
 
 int cmd_solve(const CommandArgs& argv) {
-  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}});
+  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}, {"--quiet", false}});
   // Everything is checked before anything is written.
   const std::string system_path = args.require("--system");
   const std::string out = args.require("--out");

@@ -180,7 +180,7 @@ void print_summary(const SweepSpec& spec, const std::vector<SweepJob>& jobs, con
 }  // namespace
 
 int cmd_sweep(const CommandArgs& argv) {
-  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}, {"--profile"}}, 1);
+  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}, {"--profile"}, {"--quiet", false}}, 1);
   if (args.positional().empty())
     throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--profile NAME|FILE] [--time-budget S])");
   const std::string out = args.require("--out");
