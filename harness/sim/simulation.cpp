@@ -89,6 +89,7 @@ class Simulation {
   ConstraintState state_, trial_state_;
   Eigen::Matrix3Xd x_trial_;
   bool first_setup_ = true, stop_ = false, any_max_iterations_ = false;
+  int first_frame_ = 0;
 };
 
 Simulation::Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt)
@@ -126,6 +127,7 @@ RunResult Simulation::run() {
       prob_.particles.v = s->v;
       start = s->frame;
     }
+    first_frame_ = start;
     for (int frame = start; frame < start + p_.frames && !stop_; ++frame) {
       for (int sub = 0; sub < p_.substeps && !stop_; ++sub) substep(frame, sub);
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
@@ -177,6 +179,8 @@ void Simulation::substep(int frame, int sub) {
   const bool authors_stop = p_.residual_metric == "authors";
   for (int it = 0;; ++it) {
     const Residuals r = log_state(frame, sub, it, last, r0);
+    if (opt_.on_iteration)
+      opt_.on_iteration({frame, first_frame_, p_.frames, sub, p_.substeps, it, p_.max_iterations, r0 > 0 ? r.dual / r0 : 0});
     const double dual = r.dual;
     const double stop_metric = authors_stop ? r.authors : dual;  // r0 is the same for both
     const std::string where = " at frame " + std::to_string(frame) + ", iteration " + std::to_string(it);

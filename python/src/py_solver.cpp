@@ -22,7 +22,7 @@ std::string protocol_name(nb::handle solver) {
   return "py:" + nb::cast<std::string>(n);
 }
 
-PySolver::PySolver(nb::handle solver, double tol) : tol_(tol) {
+PySolver::PySolver(nb::handle solver, double tol) : LinearSolver(tol) {
   nb::gil_scoped_acquire gil;
   obj_ = nb::borrow(solver);
   name_ = protocol_name(solver).substr(3);
@@ -71,7 +71,7 @@ LinearStats PySolver::solve(const Vector& b, Vector& x) {
   {
     nb::gil_scoped_acquire gil;
     try {
-      nb::object res = obj_.attr("solve")(vector_view(b.data(), static_cast<size_t>(b.size()), nb::handle()), tol_);
+      nb::object res = obj_.attr("solve")(vector_view(b.data(), static_cast<size_t>(b.size()), nb::handle()), tolerance());
       nb::object xo = res;
       if (nb::isinstance<nb::tuple>(res) && nb::len(res) == 2) {  // (x, iterations)
         xo = res[0];
@@ -98,7 +98,7 @@ LinearStats PySolver::solve(const Vector& b, Vector& x) {
   st.final_relative_residual = bn > 0 ? rn / bn : rn;
   st.residual_history = {bn, rn};
   st.residual_time = {0, st.solve_time};
-  st.status = st.final_relative_residual <= tol_ ? LinearStatus::converged : LinearStatus::max_iterations;
+  st.status = st.final_relative_residual <= tolerance() ? LinearStatus::converged : LinearStatus::max_iterations;
   return st;
 }
 

@@ -16,7 +16,7 @@ namespace nb = nanobind;
 
 class PySolver final : public LinearSolver {
  public:
-  // `solver` is borrowed (the GIL is taken here); tol is the solve(b, tol) tolerance.
+  // `solver` is borrowed (the GIL is taken here); tol: solve(b, tol)'s until set_tolerance.
   PySolver(nb::handle solver, double tol);
   ~PySolver() override;
 
@@ -30,7 +30,6 @@ class PySolver final : public LinearSolver {
  private:
   nb::object obj_;
   std::string name_;
-  double tol_;
   const SparseMatrix* A_ = nullptr;
   SparseMatrix compressed_;  // A's copy when it comes uncompressed (the view needs CSR arrays)
   double setup_time_ = 0;
