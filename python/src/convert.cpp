@@ -99,24 +99,27 @@ nb::object attr_to_python(const AttrValue& v) {
 }
 
 nb::dict record_to_dict(const RunRecord& r) {
-  nb::dict d;
-  d["run"] = r.name;
-  for (const auto& [k, v] : r.attrs) d[k.c_str()] = attr_to_python(v);
+  nb::dict attrs, data;
+  for (const auto& [k, v] : r.attrs) attrs[k.c_str()] = attr_to_python(v);
   for (const auto& [k, v] : r.datasets) {
     if (auto* dv = std::get_if<std::vector<double>>(&v)) {
-      d[k.c_str()] = owned(copy_of(dv->data(), dv->size()), {dv->size()});
+      data[k.c_str()] = owned(copy_of(dv->data(), dv->size()), {dv->size()});
     } else if (auto* iv = std::get_if<std::vector<long long>>(&v)) {
       auto p = std::make_unique<long long[]>(iv->size() ? iv->size() : 1);
       std::copy(iv->begin(), iv->end(), p.get());
       long long* raw = p.release();
       nb::capsule owner(raw, [](void* q) noexcept { delete[] static_cast<long long*>(q); });
-      d[k.c_str()] = nb::ndarray<nb::numpy, long long>(raw, {iv->size()}, owner).cast();
+      data[k.c_str()] = nb::ndarray<nb::numpy, long long>(raw, {iv->size()}, owner).cast();
     } else {
       nb::list l;
       for (const auto& s : std::get<std::vector<std::string>>(v)) l.append(nb::str(s.c_str()));
-      d[k.c_str()] = l;
+      data[k.c_str()] = l;
     }
   }
+  nb::dict d;
+  d["name"] = r.name;
+  d["attrs"] = attrs;
+  d["data"] = data;
   return d;
 }
 

@@ -33,8 +33,9 @@ Vector to_vector(nb::handle obj, Eigen::Index n, const std::string& what);
 // "TypeName: message" of a Python exception (the exception is consumed).
 std::string describe(const nb::python_error& e);
 
-// A run of a results file as a dict: "run" (its name), every attribute, every dataset as a
-// numpy array (strings as a list).
+// A run of a results file as a dict, as plots/xbruns.py loads one: "name", "attrs" (every
+// attribute) and "data" (every dataset as a numpy array, strings as a list); a summary and a
+// dataset may share a name (wall_time, relative_dual_residual).
 nb::dict record_to_dict(const RunRecord& r);
 nb::object attr_to_python(const AttrValue& v);
 

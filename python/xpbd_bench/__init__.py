@@ -12,6 +12,7 @@ A solver is any object with `name`, `setup(A, info)` and `solve(b, tol)` returni
 are the CLI's commands (same checks, same files, same records).
 """
 import os
+import sys
 import tempfile
 
 # OpenMP threads that sleep at barriers (the reason is in the Makefile): libgomp reads these when
@@ -19,6 +20,11 @@ import tempfile
 if "OMP_WAIT_POLICY" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "passive"
     os.environ.setdefault("GOMP_SPINCOUNT", "10000")
+# A Python solver's BLAS on one thread unless the user chose (read when numpy loads, so only if
+# it has not yet): OpenBLAS's threads spin after each call and took the cores of the harness's
+# OpenMP team (pyamg on a small primal squash, 2 cores: 14 s -> 0.3 s of solve; docs/python.md).
+if "numpy" not in sys.modules:
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from ._core import Error, System, load_system, read, scenes, parameters  # noqa: E402
 from ._core import command as _command  # noqa: E402
