@@ -26,16 +26,25 @@ if "OMP_WAIT_POLICY" not in os.environ:
 if "numpy" not in sys.modules:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from ._core import Error, System, load_system, read, scenes, parameters  # noqa: E402
-from ._core import command as _command  # noqa: E402
-from ._core import solvers as _builtin_solvers  # noqa: E402
+from . import _core  # noqa: E402
+from ._core import Error, System, scenes, parameters  # noqa: E402
 
 __all__ = ["Error", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read", "load_system"]
 
 
 def solvers():
     """The built-in methods (dicts: name, kind, available, reason, description)."""
-    return _builtin_solvers()
+    return _core.solvers()
+
+
+def read(path):
+    """Every run of a results file: dicts of name, attrs (every attribute), data (every dataset)."""
+    return _core.read(os.fspath(path))
+
+
+def load_system(path):
+    """A System from a capture's PREFIX.h5."""
+    return _core.load_system(os.fspath(path))
 
 
 def _value(v):
@@ -75,7 +84,7 @@ def _methods(solvers_):
 def _call(name, args, objects, progress):
     if not progress:
         args = args + ["--quiet"]
-    rc = _command(name, args, objects)
+    rc = _core.command(name, args, objects)
     if rc != 0:
         raise Error(f"{name} ended with exit code {rc} (see stderr)")
 

@@ -13,8 +13,8 @@ import subprocess
 import sys
 import tempfile
 
-# ~2 s here: enough outer iterations for several redraws (every 0.25 s).
-RUN = ["run", "--scene", "squash", "--set", "resolution=6", "--frames", "2", "--solver", "jacobi-pcg"]
+# ~2 s here (34 outer iterations of a direct solve): several redraws, one every 0.25 s.
+RUN = ["run", "--scene", "squash", "--set", "resolution=10", "--frames", "2", "--solver", "cholmod"]
 REDRAW = "\r\x1b[K"
 
 
@@ -47,7 +47,7 @@ def main():
         updates = [u for u in text.split(REDRAW)[1:] if re.search(r"frame \d/2, iteration \d+, .*ETA \d+:\d\d", u)]
         if rc != 0 or len(updates) < 3:
             failures.append(f"terminal: exit {rc}, {len(updates)} status lines with an ETA (want >= 3):\n{text!r}")
-        if not re.search(r"\r\x1b\[Krun: squash with jacobi-pcg \.\.\. (ok|max_iterations) \(", text):
+        if not re.search(r"\r\x1b\[Krun: squash with cholmod \.\.\. (ok|max_iterations) \(", text):
             failures.append(f"terminal: the run's own line does not close the status line:\n{text!r}")
 
         rc, quiet = on_terminal([args.binary, *RUN, "--quiet", "--out", out])
@@ -58,7 +58,7 @@ def main():
             rc = subprocess.run([args.binary, *RUN, "--out", out], stdout=subprocess.DEVNULL, stderr=log).returncode
             log.seek(0)
             piped = log.read()
-        if rc != 0 or "\x1b" in piped or "\r" in piped or not re.fullmatch(r"run: squash with jacobi-pcg \.\.\. \S+ \(.*\)\n", piped):
+        if rc != 0 or "\x1b" in piped or "\r" in piped or not re.fullmatch(r"run: squash with cholmod \.\.\. \S+ \(.*\)\n", piped):
             failures.append(f"piped: exit {rc}, stderr {piped!r}")
     for f in failures:
         print("FAIL", f)
