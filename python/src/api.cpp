@@ -26,22 +26,29 @@ namespace {
 class ScopedSolvers {
  public:
   explicit ScopedSolvers(const nb::list& solvers) {
-    for (nb::handle obj : solvers) {
-      const std::string name = protocol_name(obj);
-      MethodInfo info{name, false, true, "", "a Python solver (the protocol of docs/python.md)"};
-      register_method(info, [h = obj.ptr()](const SolverSettings& p) {
-        return std::make_unique<PySolver>(nb::handle(h), p.linear.tol);
-      });
-      names_.push_back(name);
+    try {
+      for (nb::handle obj : solvers) {
+        const std::string name = protocol_name(obj);
+        MethodInfo info{name, false, true, "", "a Python solver (the protocol of docs/python.md)"};
+        register_method(info, [h = obj.ptr()](const SolverSettings& p) {
+          return std::make_unique<PySolver>(nb::handle(h), p.linear.tol);
+        });
+        names_.push_back(name);
+      }
+    } catch (...) {
+      release();  // no destructor runs for a half-built object
+      throw;
     }
   }
-  ~ScopedSolvers() {
-    for (const auto& n : names_) unregister_method(n);
-  }
+  ~ScopedSolvers() { release(); }
   ScopedSolvers(const ScopedSolvers&) = delete;
   ScopedSolvers& operator=(const ScopedSolvers&) = delete;
 
  private:
+  void release() {
+    for (const auto& n : names_) unregister_method(n);
+    names_.clear();
+  }
   std::vector<std::string> names_;
 };
 
@@ -107,6 +114,8 @@ void bind_api(nb::module_& m) {
   m.def("command", &command, nb::arg("name"), nb::arg("args"), nb::arg("solvers"),
         "Runs an xpbd-bench command (run, capture, solve, report, sweep) with CLI arguments; the protocol objects "
         "in `solvers` are the methods py:<name> meanwhile. Returns the exit code; bad input raises xpbd_bench.Error.");
+  m.def("protocol_name", &protocol_name, nb::arg("solver"),
+        "py:<name> for an object of the solver protocol; raises Error naming what it lacks.");
   m.def("scenes", &scene_names, "The built-in scenes.");
   m.def("solvers", &solver_list, "The built-in methods: name, kind (local | global), available, reason, description.");
   m.def("parameters", &parameter_list, "Every parameter key: key, default, doc.");

@@ -8,6 +8,8 @@
 
 #include <nanobind/stl/string.h>
 
+#include <cctype>
+
 namespace xb::py {
 
 std::string protocol_name(nb::handle solver) {
@@ -15,11 +17,15 @@ std::string protocol_name(nb::handle solver) {
   if (!nb::isinstance<nb::str>(n) || nb::cast<std::string>(n).empty())
     throw Error("a Python solver needs a non-empty str attribute `name` (got " +
                 nb::cast<std::string>(nb::repr(n)) + " on " + nb::cast<std::string>(nb::repr(solver)) + ")");
+  const std::string name = nb::cast<std::string>(n);
+  for (char c : name)  // it names runs (HDF5 groups) and goes through --solver's comma list
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.')
+      throw Error("Python solver name '" + name + "': use letters, digits, '_', '-' and '.' only (it names runs)");
   for (const char* m : {"setup", "solve"})
     if (!nb::hasattr(solver, m) || !PyCallable_Check(solver.attr(m).ptr()))
-      throw Error("Python solver '" + nb::cast<std::string>(n) + "' has no method " + m +
+      throw Error("Python solver '" + name + "' has no method " + m +
                   "() (the protocol: name, setup(A, info), solve(b, tol))");
-  return "py:" + nb::cast<std::string>(n);
+  return "py:" + name;
 }
 
 PySolver::PySolver(nb::handle solver, double tol) : LinearSolver(tol) {

@@ -68,13 +68,7 @@ def _methods(solvers_):
         if isinstance(s, str):
             names.append(s)
         else:
-            name = getattr(s, "name", None)
-            if not isinstance(name, str) or not name:
-                raise Error(f"solver {s!r}: a Python solver needs a non-empty str attribute `name`")
-            bad = [c for c in name if not (c.isalnum() or c in "_-.")]
-            if bad:
-                raise Error(f"solver name {name!r}: use letters, digits, '_', '-' and '.' only (it names runs)")
-            names.append("py:" + name)
+            names.append(_core.protocol_name(s))  # checks name, setup and solve
             objects.append(s)
     if not names:
         raise Error("no solver given")

@@ -93,4 +93,10 @@ def test_what_is_not_a_solver_is_refused_before_anything_runs(tmp_path):
         xb.run("squash", solvers=[Splu(), Splu()], out=tmp_path / "r.h5", set=SCENE)
     with pytest.raises(xb.Error, match="unknown solver 'nope'"):
         xb.run("squash", solvers=["nope"], out=tmp_path / "r.h5", set=SCENE)
+    bad = Splu()
+    bad.name = "a,b"
+    with pytest.raises(xb.Error, match="letters, digits"):
+        xb.run("squash", solvers=[bad], out=tmp_path / "r.h5", set=SCENE)
     assert not (tmp_path / "r.h5").exists()
+    # A refused call leaves no solver registered: the same name runs afterwards.
+    assert xb.run("squash", solvers=[Splu()], out=tmp_path / "r.h5", set=SCENE)[0]["attrs"]["solver"] == "py:splu"
