@@ -66,7 +66,7 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
     """Runs one race entry into `path` (skipped if it exists). Returns the run's dict or None."""
     if not os.path.exists(path):
         cmd = [bench, "run", "--scene", scene, "--solver", solver, "--time-budget", f"{budget:g}",
-               *(["--form", form] if form != "none" else []), *set_args(sets), "--out", part_of(path)]
+               *(["--form", form] if form != "none" else []), *set_args(sets), *RUN_FLAGS, "--out", part_of(path)]
         print("race:", " ".join(cmd), flush=True)
         if dry_run:
             return None
