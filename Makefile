@@ -18,9 +18,12 @@ export GOMP_SPINCOUNT ?= 10000
 setup:
 	@bash scripts/setup.sh
 
+# The build also writes the Python package xpbd_bench into $(BUILD)/python/ (docs/python.md);
+# a .pth file makes the python3 on PATH import it from there.
 build: setup
 	@cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 	@cmake --build $(BUILD) -j $(JOBS)
+	@$(PYTHON) scripts/link_python_package.py $(BUILD)
 
 # The paper's Fig. 8 scene: one-sweep XPBD stalls where the global solves converge; every global
 # method in both forms of its linear step (dual A dlambda = b, primal K dx = J^T alpha~^-1 b).

@@ -3,7 +3,7 @@
 
 usage: python3 figures/race.py [--bench build/xpbd-bench] [--spec figures/race/race.toml]
                                [--out plots/race] [--only squash,cloth_hang] [--sizes 0,1]
-                               [--methods mgpbd,cholmod] [--fresh] [--dry-run]
+                               [--methods mgpbd,cholmod] [--fresh] [--dry-run] [--quiet]
 
 Every run is `xpbd-bench run` in a process of its own (a later run in the same process would reuse
 the earlier one's freed pages), into OUT/data/<scene>/<size>/<method>.<form>.<forcing>.h5; a file
@@ -13,7 +13,8 @@ the one with the lower time per outer iteration wins) and kept for the larger si
 runs first at each size; every other entry then races to the relative dual residual it ended the
 frame at (rtol = that residual, at most `overrun` times the frame's outer iterations, at most
 `budget_factor` times its wall time). Then plots/race.py draws OUT/race_<scene>.png,
-OUT/race_crossover.png and writes OUT/summary.md.
+OUT/race_crossover.png and writes OUT/summary.md. On a terminal each run shows its live status
+line (xpbd-bench run's, on the inherited stderr); --quiet: none.
 """
 import argparse
 import os
@@ -57,11 +58,15 @@ def set_args(sets):
     return args
 
 
+# Flags every run gets: --quiet when the race is (no live status line from xpbd-bench run).
+RUN_FLAGS = []
+
+
 def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
     """Runs one race entry into `path` (skipped if it exists). Returns the run's dict or None."""
     if not os.path.exists(path):
         cmd = [bench, "run", "--scene", scene, "--solver", solver, "--time-budget", f"{budget:g}",
-               *(["--form", form] if form != "none" else []), *set_args(sets), "--out", part_of(path)]
+               *(["--form", form] if form != "none" else []), *set_args(sets), *RUN_FLAGS, "--out", part_of(path)]
         print("race:", " ".join(cmd), flush=True)
         if dry_run:
             return None
@@ -183,7 +188,10 @@ def main():
     ap.add_argument("--methods", default="", help="comma-separated method labels of the spec")
     ap.add_argument("--fresh", action="store_true", help="delete OUT/data first")
     ap.add_argument("--dry-run", action="store_true", help="print the commands only")
+    ap.add_argument("--quiet", action="store_true", help="no live status line of each run on a terminal")
     args = ap.parse_args()
+    if args.quiet:
+        RUN_FLAGS.append("--quiet")
     try:
         with open(args.spec, "rb") as fh:
             spec = tomllib.load(fh)

@@ -2,7 +2,7 @@
 """`make figures`: run the sweep specs under figures/ and reproduce the paper's claims.
 
 usage: python3 figures/run.py [--bench build/xpbd-bench] [--size default|paper] [--only a,b]
-                              [--out plots/figures] [--dry-run] [--fresh]
+                              [--out plots/figures] [--dry-run] [--fresh] [--quiet]
 
 For each spec figures/NAME.toml it runs `xpbd-bench sweep SPEC --size SIZE --out
 OUT/data/SIZE/NAME.h5` (a spec's [sizes.paper] table says what changes at the paper's size;
@@ -10,7 +10,8 @@ resumable: a rerun skips finished runs), then plots/claims.py draws the figures 
 driver writes OUT/summary.md with every measured number beside the paper's (numbers from
 shared/paper/paper_and_code_notes.md). A spec whose scene, solvers or meshes are missing is run
 with what exists; a claim whose inputs are missing is reported as "not run: <reason>", never
-dropped. Exit status 0 unless the harness itself cannot be run.
+dropped. Exit status 0 unless the harness itself cannot be run. On a terminal a status line
+(tqdm) follows each sweep: runs done / total, the current run, elapsed and ETA; --quiet: none.
 """
 import argparse
 import datetime
@@ -19,7 +20,10 @@ import re
 import subprocess
 import sys
 import time
+import threading
 import tomllib
+
+import tqdm
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -117,6 +121,36 @@ def ensure_meshes(spec, log):
     return None
 
 
+SWEEP_TOTAL = re.compile(r"^sweep: .*: (\d+) runs \((\d+) already in")
+SWEEP_RUN = re.compile(r"^sweep: \[(\d+)/(\d+)\] (.*) \.\.\. (\S+)")
+
+
+def run_sweep(cmd, label, quiet):
+    """Runs `xpbd-bench sweep`, its output kept for the log; on a terminal (and not quiet) a status
+    line follows its per-run lines: runs done / total, the last run and its status, and the ETA."""
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out = []
+    reader = threading.Thread(target=lambda: out.append(proc.stdout.read()))  # the summary table
+    reader.start()
+    err, bar = [], None
+    show = sys.stderr.isatty() and not quiet
+    for line in proc.stderr:
+        err.append(line)
+        if not show:
+            continue
+        if m := SWEEP_TOTAL.match(line):
+            bar = tqdm.tqdm(total=int(m.group(1)), initial=int(m.group(2)), desc=label, unit="run", leave=False,
+                            dynamic_ncols=True)
+        elif (m := SWEEP_RUN.match(line)) and bar is not None:
+            bar.update(1)
+            bar.set_postfix_str(f"{m.group(3)}: {m.group(4)}", refresh=True)
+    proc.wait()
+    reader.join()
+    if bar is not None:
+        bar.close()
+    return subprocess.CompletedProcess(cmd, proc.returncode, "".join(out), "".join(err))
+
+
 def run_spec(name, args, inventory, notes, profile=""):
     """Runs one sweep (under `profile` if given: results NAME.PROFILE.h5, notes under
     NAME@PROFILE); returns the results path (or None) and records why parts did not run."""
@@ -153,7 +187,7 @@ def run_spec(name, args, inventory, notes, profile=""):
         if args.dry_run:
             return out if os.path.exists(out) else None
         t0 = time.time()
-        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        r = run_sweep(cmd, tag, args.quiet)
         log.write(f"$ {' '.join(cmd)}\n{r.stderr}{r.stdout}\n")
         print(r.stdout, end="", flush=True)
         print(f"  ({time.time() - t0:.0f} s)", flush=True)
@@ -217,6 +251,7 @@ def main():
     ap.add_argument("--fresh", action="store_true",
                     help="delete the selected specs' results first (a rerun otherwise keeps every finished run, "
                          "failed ones included, e.g. from an older build)")
+    ap.add_argument("--quiet", action="store_true", help="no status line on a terminal")
     args = ap.parse_args()
     if not os.access(args.bench, os.X_OK):
         sys.exit(f"figures: {args.bench} is not an executable (build first: make build, or --bench PATH)")

@@ -12,7 +12,9 @@ DEB_PACKAGES=(
   tetgen gmsh
   clang libclang-rt-14-dev llvm   # make fuzz (libFuzzer, sanitizer runtimes, llvm-symbolizer)
 )
-PY_PACKAGES=(numpy h5py matplotlib scipy pyamg)
+# nanobind + scikit-build-core: the Python package xpbd_bench (python/, pyproject.toml); pytest: its
+# tests; tqdm: figures/run.py's status line.
+PY_PACKAGES=(numpy h5py matplotlib scipy pyamg nanobind scikit-build-core pytest tqdm)
 
 missing=()
 for p in "${DEB_PACKAGES[@]}"; do
@@ -27,7 +29,7 @@ fi
 
 # One Python for everything: the python3 on PATH (plots, tests, pyamg cross-check).
 PY=${PYTHON:-python3}
-if ! "$PY" -c 'import numpy, h5py, matplotlib, scipy, pyamg' 2>/dev/null; then
+if ! "$PY" -c 'import numpy, h5py, matplotlib, scipy, pyamg, nanobind, scikit_build_core, pytest, tqdm' 2>/dev/null; then
   echo "setup: installing Python packages: ${PY_PACKAGES[*]}"
   "$PY" -m pip install -q --disable-pip-version-check "${PY_PACKAGES[@]}"
 fi

@@ -115,8 +115,17 @@ struct MethodInfo {
   std::string description;
   bool distributed = false;  // hypre, muelu: runs on every MPI rank (solvers/mpi/)
 };
-const std::vector<MethodInfo>& methods();
+const std::vector<MethodInfo>& methods();  // the built-in ones
+// A built-in or registered method, or null.
 const MethodInfo* find_method(const std::string& name);
+
+// Methods added at run time by a caller that builds its own solvers (the Python package's
+// py:<name> solvers, python/): found by find_method and made by make_linear_solver like the
+// built-in ones until unregistered, so every command runs them unchanged. Not listed by
+// methods(). register_method throws xb::Error for a name already taken; both are thread-safe.
+using SolverFactory = std::function<std::unique_ptr<LinearSolver>(const SolverSettings&)>;
+void register_method(const MethodInfo& info, SolverFactory make);
+void unregister_method(const std::string& name);
 
 // Throws xb::Error for an unknown or unavailable name.
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const SolverSettings& p);

@@ -3,6 +3,9 @@
 
 #include "../core/error.hpp"
 
+#include <map>
+#include <mutex>
+
 namespace xb {
 
 const char* to_string(LinearStatus s) {
@@ -44,7 +47,31 @@ const std::vector<Entry>& entries() {
   };
   return e;
 }
+// The registered methods (register_method), by name; a map keeps their MethodInfo in place.
+struct Extra {
+  MethodInfo info;
+  SolverFactory make;
+};
+std::mutex extras_mutex;
+std::map<std::string, Extra>& extras() {
+  static std::map<std::string, Extra> m;
+  return m;
+}
+
 }  // namespace
+
+void register_method(const MethodInfo& info, SolverFactory make) {
+  for (const auto& e : entries())
+    if (e.info.name == info.name) throw Error("method '" + info.name + "' is built in; a registered method needs another name");
+  std::lock_guard<std::mutex> lock(extras_mutex);
+  if (!extras().emplace(info.name, Extra{info, std::move(make)}).second)
+    throw Error("a method named '" + info.name + "' is already registered (two solvers with one name in a call?)");
+}
+
+void unregister_method(const std::string& name) {
+  std::lock_guard<std::mutex> lock(extras_mutex);
+  extras().erase(name);
+}
 
 const std::vector<MethodInfo>& methods() {
   static const std::vector<MethodInfo> m = [] {
@@ -58,7 +85,9 @@ const std::vector<MethodInfo>& methods() {
 const MethodInfo* find_method(const std::string& name) {
   for (const auto& m : methods())
     if (m.name == name) return &m;
-  return nullptr;
+  std::lock_guard<std::mutex> lock(extras_mutex);
+  auto it = extras().find(name);
+  return it == extras().end() ? nullptr : &it->second.info;
 }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const SolverSettings& p) {
@@ -68,6 +97,12 @@ std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const 
     if (!e.make) throw Error("'" + name + "' is a local method, not a linear solver");
     return e.make(p);
   }
+  SolverFactory extra;
+  {
+    std::lock_guard<std::mutex> lock(extras_mutex);
+    if (auto it = extras().find(name); it != extras().end()) extra = it->second.make;
+  }
+  if (extra) return extra(p);  // outside the lock: a factory may take its time
   std::string valid;
   for (const auto& e : entries())
     if (e.make) valid += (valid.empty() ? "" : ", ") + e.info.name;

@@ -2,7 +2,8 @@
 """The layout rules of docs/architecture.md, checked on the source tree (a ctest):
 
 - layers: nothing under core/ includes another project folder; nothing under problems/ includes
-  solvers/ or harness/; nothing under solvers/ includes harness/ or a scene header;
+  solvers/ or harness/; nothing under solvers/ includes harness/ or a scene header; nothing below
+  python/ (the bindings) includes it;
 - harness sub-layers: perf/ → cli/ → sim/ → io/ → the parameters (harness/*.hpp): each includes
   only the sub-layers after it;
 - size: no C++ source or header and no Python file over 400 lines, no C++ function body over 80 lines;
@@ -18,12 +19,13 @@ import sys
 
 MAX_FILE_LINES = 400
 MAX_FUNCTION_LINES = 80
-SOURCE_DIRS = ["core", "problems", "solvers", "harness", "bench", "tests"]
+SOURCE_DIRS = ["core", "problems", "solvers", "harness", "python", "bench", "tests"]
 # folder → project folders it must not include
 FORBIDDEN = {
-    "core": ["problems/", "solvers/", "harness/"],
-    "problems": ["solvers/", "harness/"],
-    "solvers": ["harness/", "problems/scenes/", "problems/scene"],
+    "core": ["problems/", "solvers/", "harness/", "python/"],
+    "problems": ["solvers/", "harness/", "python/"],
+    "solvers": ["harness/", "python/", "problems/scenes/", "problems/scene"],
+    "harness": ["python/"],
     # harness sub-layers (perf → cli → sim → io → harness/*): none includes one before it
     "harness/io": ["harness/sim/", "harness/cli/", "harness/perf/"],
     "harness/sim": ["harness/cli/", "harness/perf/"],

@@ -4,6 +4,7 @@
 #include "report.hpp"
 #include "outputs.hpp"
 #include "profile.hpp"
+#include "progress.hpp"
 #include "run_setup.hpp"
 #include "../sim/simulation.hpp"
 #include "../io/run_record.hpp"
@@ -45,7 +46,7 @@ int cmd_schema(const CommandArgs& argv) {
 
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
-            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}, {"--profile"},
+            {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}, {"--profile"}, {"--quiet", false},
              {"--save-state"}, {"--frame-of-state"}, {"--load-state"}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
@@ -91,12 +92,17 @@ int cmd_run(const CommandArgs& argv) {
                 " particles, scene '" + p.scene + "' has " + std::to_string(prob.particles.size()));
   opt.initial_state = loaded ? &*loaded : nullptr;
 
+  const bool show = progress_wanted(args);
   int index = 0;
   for (const auto& [method, form, tag] : runs) {
     Params q = p;
     if (!form.empty()) q.form = form;
-    std::cerr << "run: " << p.scene << " with " << tag << " ..." << std::flush;
+    const std::string head = "run: " + p.scene + " with " + tag + " ...";
+    std::cerr << head << std::flush;
+    ProgressLine line(show, head);
     RunOptions run_opt = opt;
+    const std::string which = runs.size() > 1 ? "run " + std::to_string(index + 1) + "/" + std::to_string(runs.size()) : "";
+    run_opt.on_iteration = [&line, which](const IterationProgress& s) { line.set_iteration(s, which); };
     if (args.has("--write-meshes")) {  // DIR/<scene>_<solver>_NNNN.ply per frame
       const std::string dir = args.get("--write-meshes");
       // The name is captured by value: clang 14 cannot capture a structured binding.
@@ -109,6 +115,7 @@ int cmd_run(const CommandArgs& argv) {
         if (s.frame == state_frame + 1) write_state(save_state, s, q);
       };
     const RunResult res = run_simulation(prob, q, method, run_opt);
+    line.stop();
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
     ++index;
     append_runs(out, {make_simulation_record(run_name(index, p.scene, tag), q, method, res)}, index == 1);

@@ -7,6 +7,7 @@
 #include "../sim/primal_solve.hpp"
 #include "report.hpp"
 #include "outputs.hpp"
+#include "progress.hpp"
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 #include "../io/system_io.hpp"
@@ -91,7 +92,7 @@ void check_capture_outputs(const std::string& prefix, const std::string& scene, 
 
 int cmd_capture(const CommandArgs& argv) {
   Args args("capture", argv,
-            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}, {"--time-budget"}});
+            {{"--scene"}, {"--set", true, true}, {"--frame"}, {"--substep"}, {"--iteration"}, {"--out"}, {"--solver"}, {"--time-budget"}, {"--quiet", false}});
   // Everything is checked before anything runs or is written.
   const std::string scene = args.require("--scene");
   const std::string prefix = strip_h5(args.require("--out"));
@@ -112,11 +113,14 @@ int cmd_capture(const CommandArgs& argv) {
                 std::to_string(p.max_iterations) + " (raise it with --set max_iterations=N)");
   check_capture_outputs(prefix, scene, p);
   const double budget = time_budget_flag(args, "capture");
-  std::cerr << "capture: " << p.scene << " with " << solver << " to frame " << frame << ", substep " << substep
-            << ", iteration " << iteration << " ..." << std::flush;
+  const std::string head = "capture: " + p.scene + " with " + solver + " to frame " + std::to_string(frame) + ", substep " +
+                           std::to_string(substep) + ", iteration " + std::to_string(iteration) + " ...";
+  std::cerr << head << std::flush;
   CapturedSystem sys;
   try {
-    sys = capture_system(p, solver, frame, substep, iteration, budget);
+    ProgressLine line(progress_wanted(args), head);
+    sys = capture_system(p, solver, frame, substep, iteration, budget,
+                         [&line](const IterationProgress& s) { line.set_iteration(s); });
   } catch (const Error&) {
     std::cerr << "\n";
     throw;
@@ -267,7 +271,7 @@ void record_outcome(RunRecord& r, SolveOutcome o, const DirectReference& ref, co
 }  // namespace
 
 int cmd_solve(const CommandArgs& argv) {
-  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}});
+  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}, {"--quiet", false}});
   // Everything is checked before anything is written.
   const std::string system_path = args.require("--system");
   const std::string out = args.require("--out");
@@ -291,7 +295,13 @@ int cmd_solve(const CommandArgs& argv) {
       throw Error("solve: " + system_path + " has no primal data (/J; captured before the primal form existed): recapture it, or use form=dual");
     setups.emplace_back(q, sys.has_primal() ? resolve_form(q.form, sys.alpha_tilde) : "dual");
   }
-  const DirectReference ref = direct_reference(sys.A, sys.b, p);
+  const bool show = progress_wanted(args);
+  DirectReference ref;
+  {
+    ProgressLine line(show, "solve: direct reference (cholmod) ...");
+    ref = direct_reference(sys.A, sys.b, p);
+    line.erase();
+  }
 
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto& [q, form] = setups[i];
@@ -311,8 +321,15 @@ int cmd_solve(const CommandArgs& argv) {
     r.attrs["rhs_norm"] = norm2(sys.b);
     r.attrs["direct_status"] = ref.status;
     r.attrs["direct_relative_residual"] = ref.relative_residual;
-    std::cerr << "solve: " << stem << " with " << runs[i].tag << " ..." << std::flush;
-    record_outcome(r, solve_one(sys, runs[i].method, q, form), ref, sys.A, sys.b);
+    const std::string head = "solve: " + stem + " with " + runs[i].tag + " ...";
+    std::cerr << head << std::flush;
+    SolveOutcome outcome;
+    {
+      ProgressLine line(show, head);  // a solve reports nothing on its way: run i/N and the time
+      line.set("run " + std::to_string(i + 1) + "/" + std::to_string(runs.size()), -1);
+      outcome = solve_one(sys, runs[i].method, q, form);
+    }
+    record_outcome(r, std::move(outcome), ref, sys.A, sys.b);
     append_runs(out, {r}, i == 0);
   }
   print_report(out, "table");

@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "report.hpp"
 #include "outputs.hpp"
+#include "progress.hpp"
 #include "run_setup.hpp"
 #include "../sim/simulation.hpp"
 #include "../io/run_record.hpp"
@@ -15,11 +16,10 @@
 #include "../../problems/scene.hpp"
 #include "../../solvers/timer.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -31,30 +31,10 @@ namespace xb {
 
 namespace {
 
-std::string duration(double s) {
-  char b[32];
-  if (s < 60) std::snprintf(b, sizeof b, "%.0fs", s);
-  else if (s < 3600) std::snprintf(b, sizeof b, "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
-  else std::snprintf(b, sizeof b, "%dh%02dm", static_cast<int>(s) / 3600, (static_cast<int>(s) % 3600) / 60);
-  return b;
-}
-
 std::string describe(const SweepJob& j, int repeats) {
   std::string s = (j.point_text == "-" ? "" : j.point_text + " ") + j.solver;
   if (repeats > 1) s += " #" + std::to_string(j.repeat);
   return s;
-}
-
-// One progress line on a terminal, redrawn in place.
-void draw_bar(int done, int total, const std::string& current, double eta) {
-  const int width = 24;
-  const int filled = total > 0 ? done * width / total : width;
-  std::string bar(filled, '#');
-  bar += std::string(width - filled, '.');
-  std::ostringstream os;
-  os << "\r\033[K[" << bar << "] " << done << "/" << total << "  " << current;
-  if (eta >= 0) os << "  ETA " << duration(eta);
-  std::cerr << os.str() << std::flush;
 }
 
 void print_table(const std::vector<std::vector<std::string>>& rows) {
@@ -103,7 +83,8 @@ class JobRunner {
     opt_.time_budget = spec.time_budget;
     opt_.reference = spec.reference;
   }
-  RunRecord run(const SweepJob& job, int index, RunResult& res) {
+  RunRecord run(const SweepJob& job, int index, RunResult& res, std::function<void(const IterationProgress&)> on_iteration) {
+    opt_.on_iteration = std::move(on_iteration);
     if (job.point != point_) {
       prob_.reset();
       error_.clear();
@@ -180,7 +161,7 @@ void print_summary(const SweepSpec& spec, const std::vector<SweepJob>& jobs, con
 }  // namespace
 
 int cmd_sweep(const CommandArgs& argv) {
-  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}, {"--profile"}}, 1);
+  Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}, {"--profile"}, {"--quiet", false}}, 1);
   if (args.positional().empty())
     throw Error("sweep: which spec? (sweep SPEC.toml --out FILE.h5 [--size NAME] [--profile NAME|FILE] [--time-budget S])");
   const std::string out = args.require("--out");
@@ -205,7 +186,7 @@ int cmd_sweep(const CommandArgs& argv) {
   int todo = 0;
   for (const auto& j : jobs) todo += finished.count(j.key) ? 0 : 1;
 
-  const bool tty = isatty(STDERR_FILENO);
+  const bool show = progress_wanted(args);
   const int total = static_cast<int>(jobs.size());
   std::cerr << "sweep: " << spec.path << ": " << total << " runs (" << (total - todo) << " already in " << out << ", "
             << todo << " to do)\n";
@@ -214,28 +195,26 @@ int cmd_sweep(const CommandArgs& argv) {
   double spent = 0;
   for (const auto& job : jobs) {
     if (finished.count(job.key)) continue;
-    const std::string what = describe(job, spec.repeats);
-    const double eta = timed > 0 ? spent / timed * (total - done) : -1;
-    if (tty) draw_bar(done, total, what, eta);
-    else std::cerr << "sweep: [" << done + 1 << "/" << total << "] " << what << " ..." << std::flush;
+    const std::string head = "sweep: [" + std::to_string(done + 1) + "/" + std::to_string(total) + "] " +
+                             describe(job, spec.repeats) + " ...";
+    std::cerr << head << std::flush;
     Timer clock;
     RunResult res;
-    const RunRecord rec = runner.run(job, ++index, res);
+    RunRecord rec;
+    {
+      ProgressLine line(show, head);
+      if (timed > 0) line.set_remaining(spent / timed * (total - done));  // the sweep's ETA: runs left × mean
+      rec = runner.run(job, ++index, res, [&line](const IterationProgress& s) { line.set_iteration(s); });
+    }
     append_runs(out, {rec}, existing == 0 && index == 1);
     finished[job.key] = rec.name;
     ++done;
     spent += clock.seconds();
     ++timed;
-    if (!tty) {
-      std::ostringstream os;
-      os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
-         << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
-      std::cerr << os.str() << "\n";
-    }
-  }
-  if (tty) {
-    draw_bar(done, total, "done", -1);
-    std::cerr << "\n";
+    std::ostringstream os;
+    os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
+       << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
+    std::cerr << os.str() << "\n";
   }
   print_summary(spec, jobs, out);
   // The sweep did what it was asked (its runs are in the file), so it succeeds: exit code 1 here

@@ -10,13 +10,14 @@
 namespace xb {
 
 CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration,
-                              double time_budget) {
+                              double time_budget, std::function<void(const IterationProgress&)> on_iteration) {
   if (p.frames < frame + 1) p.frames = frame + 1;
   const Problem prob = build_problem(p);
   CapturedSystem sys;
   bool captured = false;
   RunOptions opt;
   opt.time_budget = time_budget;
+  opt.on_iteration = std::move(on_iteration);
   opt.on_system = [&](const SystemView& v) {
     if (v.frame != frame || v.substep != substep || v.iteration != iteration) return false;
     sys.A = v.A;

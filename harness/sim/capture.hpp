@@ -3,10 +3,13 @@
 // to be solved, and keep its dual system with the data of its primal form.
 #pragma once
 
+#include "simulation.hpp"
+
 #include "../io/system_io.hpp"
 
 #include "../params.hpp"
 
+#include <functional>
 #include <string>
 
 namespace xb {
@@ -14,8 +17,10 @@ namespace xb {
 // Runs `driver` (a global method; cholmod by default elsewhere, so that the system does not depend
 // on the solver under test) on the scene of `p` until the system of (frame, substep, iteration)
 // is assembled, and returns it; p.frames is raised to reach the frame. Throws xb::Error saying
-// where the run stopped if it never gets there (time_budget: s, 0 = none, as RunOptions).
+// where the run stopped if it never gets there (time_budget: s, 0 = none, and on_iteration as in
+// RunOptions).
 CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration,
-                              double time_budget = 0);
+                              double time_budget = 0,
+                              std::function<void(const IterationProgress&)> on_iteration = {});
 
 }  // namespace xb

@@ -93,6 +93,7 @@ class Simulation {
   // Where the run is, for an out-of-memory message (std::bad_alloc says nothing).
   std::string phase_ = "the set-up of the run";
   int frame_ = 0, iteration_ = 0;
+  int first_frame_ = 0;
 };
 
 Simulation::Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt)
@@ -130,6 +131,7 @@ RunResult Simulation::run() {
       prob_.particles.v = s->v;
       start = s->frame;
     }
+    first_frame_ = start;
     for (int frame = start; frame < start + p_.frames && !stop_; ++frame) {
       for (int sub = 0; sub < p_.substeps && !stop_; ++sub) substep(frame, sub);
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
@@ -187,6 +189,8 @@ void Simulation::substep(int frame, int sub) {
     iteration_ = it;
     phase_ = "the constraint evaluation";
     const Residuals r = log_state(frame, sub, it, last, r0);
+    if (opt_.on_iteration)
+      opt_.on_iteration({frame, first_frame_, p_.frames, sub, p_.substeps, it, p_.max_iterations, r0 > 0 ? r.dual / r0 : 0});
     const double dual = r.dual;
     const double stop_metric = authors_stop ? r.authors : dual;  // r0 is the same for both
     const std::string where = " at frame " + std::to_string(frame) + ", iteration " + std::to_string(it);

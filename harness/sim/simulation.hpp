@@ -31,6 +31,14 @@ struct SystemView {
   const Eigen::Matrix3Xd& x;
 };
 
+// Where a run stands, after each evaluation of the dual residual (RunOptions::on_iteration).
+struct IterationProgress {
+  int frame, first_frame, frames;  // frames: how many the run takes, from first_frame
+  int substep, substeps;
+  int iteration, max_iterations;
+  double relative_dual_residual;
+};
+
 struct RunOptions {
   double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
   // Solve every substep also by the reference method (harness/sim/reference.hpp) and log the
@@ -39,6 +47,8 @@ struct RunOptions {
   // Called with the system of every global outer iteration before it is solved; returning true
   // ends the run (used by `capture`).
   std::function<bool(const SystemView&)> on_system;
+  // Called after every evaluation of the dual residual (live progress: harness/cli/progress.hpp).
+  std::function<void(const IterationProgress&)> on_iteration;
   // Called after every frame with the positions (for mesh output).
   std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
   // Called after every frame with the state the next frame starts from (for --save-state).

@@ -1,0 +1,140 @@
+"""xpbd_bench: the XPBD solver benchmark from Python (docs/python.md).
+
+    import xpbd_bench as xb
+    xb.scenes(); xb.solvers(); xb.parameters()           # what `xpbd-bench list` prints
+    xb.run("squash", solvers=["mgpbd", MySolver()], out="r.h5", frames=1, set={"mesh": "bunny:12k"})
+    sys = xb.capture("cloth_hang", frame=0, iteration=0, set={"resolution": 16})
+    xb.solve(sys, solvers=["cholmod", MySolver()], form="primal", tol=1e-8, out="s.h5")
+    runs = xb.read("r.h5")
+
+A solver is any object with `name`, `setup(A, info)` and `solve(b, tol)` returning x or
+(x, iterations); it runs inside the C++ stepper as the method py:<name>. run, capture and solve
+are the CLI's commands (same checks, same files, same records).
+"""
+import os
+import sys
+import tempfile
+
+# OpenMP threads that sleep at barriers (the reason is in the Makefile): libgomp reads these when
+# it loads, which is when _core is imported, so they are set first unless the user chose.
+if "OMP_WAIT_POLICY" not in os.environ:
+    os.environ["OMP_WAIT_POLICY"] = "passive"
+    os.environ.setdefault("GOMP_SPINCOUNT", "10000")
+# A Python solver's BLAS on one thread unless the user chose (read when numpy loads, so only if
+# it has not yet): OpenBLAS's threads spin after each call and took the cores of the harness's
+# OpenMP team (pyamg on a small primal squash, 2 cores: 14 s -> 0.3 s of solve; docs/python.md).
+if "numpy" not in sys.modules:
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from . import _core  # noqa: E402
+from ._core import Error, System, scenes, parameters  # noqa: E402
+
+__all__ = ["Error", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read", "load_system"]
+
+
+def solvers():
+    """The built-in methods (dicts: name, kind, available, reason, description)."""
+    return _core.solvers()
+
+
+def read(path):
+    """Every run of a results file: dicts of name, attrs (every attribute), data (every dataset)."""
+    return _core.read(os.fspath(path))
+
+
+def load_system(path):
+    """A System from a capture's PREFIX.h5."""
+    return _core.load_system(os.fspath(path))
+
+
+def _value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
+
+
+def _sets(values):
+    return [a for k, v in (values or {}).items() for a in ("--set", f"{k}={_value(v)}")]
+
+
+def _methods(solvers_):
+    """--solver's list and the protocol objects among `solvers_` (names: str, objects: py:<name>)."""
+    if isinstance(solvers_, (str, bytes)) or not hasattr(solvers_, "__iter__"):
+        solvers_ = [solvers_]
+    names, objects = [], []
+    for s in solvers_:
+        if isinstance(s, str):
+            names.append(s)
+        else:
+            names.append(_core.protocol_name(s))  # checks name, setup and solve
+            objects.append(s)
+    if not names:
+        raise Error("no solver given")
+    return ",".join(names), objects
+
+
+def _call(name, args, objects, progress):
+    if not progress:
+        args = args + ["--quiet"]
+    rc = _core.command(name, args, objects)
+    if rc != 0:
+        raise Error(f"{name} ended with exit code {rc} (see stderr)")
+
+
+def run(scene, solvers, out, frames=None, set=None, form=None, profile=None, time_budget=None, reference=False,
+        progress=False):
+    """`xpbd-bench run`: each solver (a built-in name or a protocol object) on the scene, every run
+    appended to `out`. `set`: any parameter keys ({"mesh": "bunny:12k", "linear.tol": 1e-2});
+    `form`: "dual", "primal" or "dual,primal" (--form). Returns read(out)."""
+    names, objects = _methods(solvers)
+    args = ["--scene", str(scene), "--solver", names, "--out", os.fspath(out)] + _sets(set)
+    if frames is not None:
+        args += ["--frames", str(frames)]
+    if form is not None:
+        args += ["--form", form]
+    if profile is not None:
+        args += ["--profile", profile]
+    if time_budget is not None:
+        args += ["--time-budget", _value(time_budget)]
+    if reference:
+        args.append("--reference")
+    _call("run", args, objects, progress)
+    return read(out)
+
+
+def capture(scene, frame, iteration, substep=0, set=None, solver="cholmod", out=None, time_budget=None,
+            progress=False):
+    """`xpbd-bench capture`: the linear step of (frame, substep, iteration) as a System. With out
+    (a prefix), its files stay there (PREFIX.h5, PREFIX_A.mtx, ...); without, they go to a
+    temporary folder that lives as long as the System."""
+    names, objects = _methods([solver])
+    keep = None
+    if out is None:
+        keep = tempfile.TemporaryDirectory(prefix="xpbd_bench_")
+        out = os.path.join(keep.name, "system")
+    prefix = os.fspath(out)
+    prefix = prefix[:-3] if prefix.endswith(".h5") else prefix
+    args = ["--scene", str(scene), "--frame", str(frame), "--substep", str(substep), "--iteration", str(iteration),
+            "--solver", names, "--out", prefix] + _sets(set)
+    if time_budget is not None:
+        args += ["--time-budget", _value(time_budget)]
+    _call("capture", args, objects, progress)
+    system = load_system(prefix + ".h5")
+    system._tmpdir = keep
+    return system
+
+
+def solve(system, solvers, out, form=None, tol=None, set=None, progress=False):
+    """`xpbd-bench solve`: each solver on a captured system (a System or its .h5 path) from a fresh
+    instance, against the direct reference. Returns read(out)."""
+    path = system.path if isinstance(system, System) else os.fspath(system)
+    names, objects = _methods(solvers)
+    args = ["--system", path, "--solver", names, "--out", os.fspath(out)] + _sets(set)
+    if form is not None:
+        args += ["--form", form]
+    if tol is not None:
+        args += ["--tol", _value(tol)]
+    _call("solve", args, objects, progress)
+    return read(out)
