@@ -86,8 +86,8 @@ void spmv_rows(Table& t, const std::string& form, const SparseMatrix& A, double 
   std::snprintf(note, sizeof note, "floor %.3f ms: %.2fx", floor_ms, t.spmv_ms / floor_ms);
   t.add(form, "spmv", t.spmv_ms, note);
   // The V-cycle's single-precision storage: the same product on float values.
-  amg::CsrOf<float> Af = A.cast<float>();
-  amg::VectorOf<float> xf = amg::VectorOf<float>::Ones(A.rows()), yf(A.rows());
+  CsrOf<float> Af = A.cast<float>();
+  VectorOf<float> xf = VectorOf<float>::Ones(A.rows()), yf(A.rows());
   const double f_ms = least_ms(
       [&] {
         const int n = static_cast<int>(Af.rows());
