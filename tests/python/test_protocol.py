@@ -70,7 +70,7 @@ def test_a_broken_solver_is_an_error_run_and_the_others_are_intact(tmp_path, how
 
 def test_a_broken_solver_at_the_linear_level(tmp_path):
     system = xb.capture("cloth_hang", frame=0, iteration=0, set={"resolution": 8})
-    runs = xb.solve(system, solvers=["cholmod", Broken("short"), Broken("solve-raises")], out=tmp_path / "s.h5")
+    runs = xb.solve(system, solvers=["cholmod", Broken("short"), Broken("solve-raises")], form="dual", out=tmp_path / "s.h5")
     assert [r["attrs"]["status"] for r in runs] == ["ok", "error", "error"]
     n = system.A.shape[0]
     assert f"returned an array of shape ({n - 1},); expected ({n},)" in runs[1]["attrs"]["message"]
