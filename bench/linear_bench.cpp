@@ -186,6 +186,7 @@ void parse_args(int argc, char** argv, Config& c, std::vector<char*>& rest) {
 
 int main(int argc, char** argv) {
   xb::ensure_bounded_wait_policy(argv);
+  xb::limit_blas_threads();
   Config c;
   std::vector<char*> rest{argv[0]};
   try {

@@ -38,6 +38,7 @@ void usage(std::ostream& os) {
 
 int main(int argc, char** argv) {
   xb::ensure_bounded_wait_policy(argv);
+  xb::limit_blas_threads();
   MPI_Init(&argc, &argv);
   // Under mpirun, ranks > 0 only serve the distributed solvers (hypre, muelu) of rank 0.
   if (xb::mpi_rank() > 0) {

@@ -1,5 +1,6 @@
 #include "wait_policy.hpp"
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -25,6 +26,11 @@ void ensure_bounded_wait_policy(char** argv) {
   ::unsetenv("OMP_WAIT_POLICY");
   if (set_spin) ::unsetenv("GOMP_SPINCOUNT");
   ::unsetenv(marker);
+}
+
+void limit_blas_threads() {
+  if (std::getenv("OPENBLAS_NUM_THREADS")) return;
+  if (auto set = reinterpret_cast<void (*)(int)>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
 }
 
 }  // namespace xb

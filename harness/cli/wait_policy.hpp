@@ -17,4 +17,12 @@ inline constexpr const char* kSpinCount = "10000";
 // first in main, before MPI_Init or any OpenMP call. A policy the user set is theirs: left alone.
 void ensure_bounded_wait_policy(char** argv);
 
+// OpenBLAS (CHOLMOD's supernodal BLAS) runs its own pool of threads beside the OpenMP team. On the
+// 2-core machine under load its synchronisation made CHOLMOD's analysis + factorisation of the
+// captured cloth 256² system 13× slower (load 10: 13.2 s with 2 threads against 0.97 s with one),
+// while on a quiet machine one thread is as fast (0.634 s against 0.642 s): one thread unless
+// OPENBLAS_NUM_THREADS is set. A BLAS other than OpenBLAS is left alone. Runs record the count
+// (`blas_threads`).
+void limit_blas_threads();
+
 }  // namespace xb

@@ -2,6 +2,7 @@
 
 #include "../../solvers/linear_solver.hpp"
 
+#include <dlfcn.h>
 #include <omp.h>
 #include <unistd.h>
 
@@ -78,6 +79,9 @@ void add_provenance(RunRecord& r, const Params& p) {
   r.attrs["git_sha"] = std::string(XB_GIT_SHA);
   r.attrs["machine"] = machine_description();
   r.attrs["omp_threads"] = static_cast<long long>(omp_get_max_threads());
+  // OpenBLAS's own threads (harness/cli/wait_policy.hpp); absent with another BLAS.
+  if (auto get = reinterpret_cast<int (*)()>(::dlsym(RTLD_DEFAULT, "openblas_get_num_threads")))
+    r.attrs["blas_threads"] = static_cast<long long>(get());
   r.attrs["omp_wait_policy"] = process_start.omp_wait_policy;
   r.attrs["omp_spin_count"] = process_start.omp_spin_count;
   if (process_start.load_average >= 0) r.attrs["load_average"] = process_start.load_average;
