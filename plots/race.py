@@ -108,7 +108,9 @@ def size_key(entries):
 def draw_scene(plt, scene, sizes, out):
     names = sorted(sizes, key=lambda s: size_key(sizes[s]))
     fig, axes = plt.subplots(1, len(names), figsize=(5.2 * len(names), 4.2), squeeze=False)
+    colours = plt.get_cmap("tab20").colors
     for ax, size in zip(axes[0], names):
+        ax.set_prop_cycle(color=colours)
         for e in sorted(sizes[size], key=label):
             t, rel = trajectory(e["run"])
             style = "--" if e["forcing"] == "eisenstat_walker" else "-"
@@ -116,6 +118,7 @@ def draw_scene(plt, scene, sizes, out):
         target = exact_target(sizes[size])
         if math.isfinite(target):
             ax.axhline(target, color="grey", lw=0.8, ls=":")
+            ax.set_ylim(target / 3, 2.0)  # a diverged run's climb would hide the race
         ax.set_title(f"{scene} {size}")
         ax.set_xlabel("wall time within the frame (s)")
         ax.set_ylabel("relative dual residual")

@@ -1,4 +1,5 @@
 #include "amg_settings.hpp"
+#include "relaxation/smoothers.hpp"
 
 #include "../../core/error.hpp"
 
@@ -9,6 +10,13 @@ namespace {
 template <class Part>
 SettingField<amg::AmgOptions> in_part(Part amg::AmgOptions::*part, SettingField<Part> f) {
   return {f.key, f.type, f.doc, [r = f.ref, part](amg::AmgOptions& o) { return r(o.*part); }, f.min, f.max, f.choices};
+}
+
+// amg.smoother's choices: auto and the kinds make_smoother knows (one list).
+std::vector<std::string> with_auto(const std::vector<std::string>& kinds) {
+  std::vector<std::string> v{"auto"};
+  v.insert(v.end(), kinds.begin(), kinds.end());
+  return v;
 }
 }  // namespace
 
@@ -29,7 +37,7 @@ const SettingTable<amg::AmgOptions>& amg_settings() {
       setting("amg.min_coarsening", "block systems: a nodal aggregation with fewer nodes per aggregate than this is redone with every coupling (theta 0) on levels >= 1, then, if still below, its aggregates are aggregated again, so smoothed-P Galerkin operators do not fill in (0 = never)", &S::min_coarsening, 0, 1e6),
       setting("amg.drop_tolerance", "block systems, level 0: node blocks with |A_IJ|_F < tol sqrt(|A_II|_F |A_JJ|_F) (numerically zero couplings of the mesh pattern) are dropped from the hierarchy's copy, their norms added to the diagonal so it stays SPD (0 = keep all)", &S::drop_tolerance, 0, 1),
       setting("amg.prolongator_diagonal", "D of the smoothed prolongator: block (the node blocks: the block smoothers' D, whose lambda_max is then reused; on a scalar system the diagonal) | scalar (A's diagonal)", &S::prolongator_diagonal, {"scalar", "block"}),
-      in_part(&S::smoother, setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &SM::kind, {"auto", "jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"})),
+      in_part(&S::smoother, setting("amg.smoother", "auto (chebyshev dual, block_chebyshev primal) | jacobi | chebyshev | gs | block_gs (symmetric multicolour GS on node blocks) | block_jacobi | block_chebyshev (in D_block^-1 A)", &SM::kind, with_auto(amg::smoother_kinds()))),
       in_part(&S::smoother, setting("amg.smoother_sweeps", "pre- and post-smoothing sweeps (0 = auto: 1)", &SM::sweeps, 0, 100)),
       in_part(&S::smoother, setting("amg.chebyshev_degree", "degree of the chebyshev and block_chebyshev polynomials: passes over the level's matrix per sweep (0 = auto: 3 dual, the authors'; 4 primal)", &SM::degree, 0, 20)),
       setting("amg.coarse_solver", "coarsest level: direct (Cholesky) | smoother (the level's smoother sweeps from zero, the authors')", &S::coarse_solver, {"direct", "smoother"}),

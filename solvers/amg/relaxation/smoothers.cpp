@@ -9,7 +9,10 @@
 
 namespace xb::amg {
 
-const char* const kSmootherKinds = "jacobi, chebyshev, gs, block_gs, block_jacobi, block_chebyshev";
+const std::vector<std::string>& smoother_kinds() {
+  static const std::vector<std::string> kinds = {"jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"};
+  return kinds;
+}
 
 std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const SparseMatrix& A, const NodeLayout& nodes,
                                         const BlockOperator* blocks) {
@@ -19,7 +22,9 @@ std::unique_ptr<Smoother> make_smoother(const SmootherOptions& opt, const Sparse
   if (opt.kind == "gs") return std::make_unique<GaussSeidelSmoother>(opt, A);
   if (opt.kind == "block_gs") return std::make_unique<BlockGaussSeidelSmoother>(opt, A, nodes);
   if (opt.kind == "block_jacobi" || opt.kind == "block_chebyshev") return make_block_diagonal_smoother(opt, A, nodes, blocks);
-  throw Error("amg.smoother: unknown smoother '" + opt.kind + "' (valid: " + kSmootherKinds + ")");
+  std::string valid;
+  for (const auto& k : smoother_kinds()) valid += (valid.empty() ? "" : ", ") + k;
+  throw Error("amg.smoother: unknown smoother '" + opt.kind + "' (valid: " + valid + ")");
 }
 
 }  // namespace xb::amg

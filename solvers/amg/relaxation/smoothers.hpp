@@ -16,13 +16,16 @@
 #include "smoother.hpp"
 
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace xb::amg {
 
 struct BlockOperator;
 
-// The smoother kinds make_smoother knows, for messages: "jacobi, chebyshev, ...".
-extern const char* const kSmootherKinds;
+// The smoother kinds make_smoother knows: the amg.smoother table's choices (with auto) and its
+// messages read this one list.
+const std::vector<std::string>& smoother_kinds();
 
 // `nodes`: the level's node layout (the block kinds' D; scalar: 1×1 blocks). `blocks`: A's node
 // blocks in that layout (not owned, outliving the smoother) for block_jacobi and block_chebyshev

@@ -15,11 +15,8 @@ using namespace xb::test;
 
 TEST(Smoothers, EveryKindMakesTheSmootherOfItsName) {
   const SparseMatrix A = poisson2d(6);
-  std::stringstream kinds(kSmootherKinds);
-  std::string kind;
   int made = 0;
-  while (std::getline(kinds, kind, ',')) {
-    kind.erase(0, kind.find_first_not_of(' '));
+  for (const std::string& kind : smoother_kinds()) {
     SmootherOptions o;
     o.kind = kind;
     EXPECT_EQ(make_smoother(o, A)->name(), kind);
