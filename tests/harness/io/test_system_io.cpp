@@ -39,7 +39,9 @@ void replace_b(const std::string& file, hsize_t n, const Vector& values) {
   H5Pset_chunk(dcpl, 1, &chunk);
   H5Pset_deflate(dcpl, 6);
   const hid_t ds = H5Dcreate2(f, "/b", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-  if (values.size()) EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  if (values.size()) {
+    EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+  }
   H5Dclose(ds);
   H5Pclose(dcpl);
   H5Sclose(space);
