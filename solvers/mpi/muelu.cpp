@@ -163,6 +163,12 @@ class MueLuKernel final : public DistributedKernel {
     }
     if (p.muelu.reuse != "none" && p.muelu.reuse != "tP" && p.muelu.reuse != "RP")
       throw Error("muelu.reuse: unknown '" + p.muelu.reuse + "' (valid: none, tP, RP)");
+    // On K (3 rows per node) Trilinos 13.2's RP reuse throws on the first reuse (Tpetra: "Trying
+    // to insert a new entry into a static graph" in the coarse operator's product), on cloth,
+    // bar and squash alike: refused here with a message, not left to fail mid-run.
+    if (block_size > 1 && p.muelu.reuse == "RP")
+      throw Error("muelu.reuse = RP does not work on the primal form's K in Trilinos 13.2 (its coarse-operator "
+                  "reuse throws); use tP or none, or form = dual");
     L.set("reuse: type", p.muelu.reuse);
     set_smoother(L, p);
     return L;

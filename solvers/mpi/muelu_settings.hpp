@@ -13,7 +13,7 @@ struct MueluSettings {
   std::string smoother = "chebyshev";  // chebyshev | jacobi | gs | sgs
   int smoother_sweeps = 1;
   int coarse_size = 400;
-  std::string reuse = "RP";  // none | tP | RP: MueLu "reuse: type" for Values setups
+  std::string reuse = "tP";  // none | tP | RP: MueLu "reuse: type" for Values setups
 };
 const SettingTable<MueluSettings>& muelu_settings();
 

@@ -1,5 +1,6 @@
 // linear.forcing: the Eisenstat–Walker sequence (choice 2, safeguard, cap, floor) against its
 // formula, and a simulation that records and honours it.
+#include "harness/cli/run_setup.hpp"
 #include "harness/params.hpp"
 #include "harness/sim/forcing.hpp"
 #include "harness/sim/simulation.hpp"
@@ -107,3 +108,21 @@ TEST(Forcing, RefinedPrimalSolvesMeetLooseTolerances) {
     EXPECT_LE(L.linear_relative_residual[i], L.linear_tolerance[i] * 1.0001) << "entry " << i;
 }
 #endif
+
+// The default cap is what keeps Eisenstat–Walker safe on a stiff bar: XPBD's outer loop is no
+// Newton method, and with Eisenstat & Walker's own η_max = 0.9 cg diverged (runaway speed) on
+// bar_hang r3 in the primal form and stalled at max_iterations in the dual. At the defaults every
+// Krylov method reaches the outer tolerance in both forms; the 0.9 run shows the test can fail.
+TEST(Forcing, DefaultCapConvergesTheStiffBar) {
+  for (const char* form : {"dual", "primal"}) {
+    const Params p = resolve_params("bar_hang", {"resolution=3", "max_iterations=50", std::string("form=") + form});
+    ASSERT_EQ(p.linear.forcing, "eisenstat_walker");
+    const Problem prob = build_problem(p);
+    for (const char* method : {"cg", "jacobi-pcg"}) {
+      const RunResult r = run_simulation(prob, p, method);
+      EXPECT_EQ(r.status, "ok") << method << ", " << form << ": " << r.message;
+    }
+  }
+  const Params loose = resolve_params("bar_hang", {"resolution=3", "max_iterations=50", "form=primal", "linear.forcing_max=0.9"});
+  EXPECT_NE(run_simulation(build_problem(loose), loose, "cg").status, "ok");
+}

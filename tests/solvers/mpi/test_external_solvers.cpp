@@ -7,6 +7,7 @@
 #include "harness/cli/run_setup.hpp"
 #include "harness/io/run_record.hpp"
 #include "harness/io/recorder.hpp"
+#include "harness/sim/simulation.hpp"
 #include "problems/dual_system.hpp"
 #include "harness/params.hpp"
 #include "problems/scene.hpp"
@@ -122,6 +123,7 @@ TEST_P(ExternalSolver, ValuesSetupAfterChangeSolvesNewSystem) {
   const std::string name = GetParam();
   Params p = solver_params();
   if (name == "hypre") p.hypre.reuse = "hierarchy";  // exercise the reuse path (default: none)
+  if (name == "muelu") p.muelu.reuse = "RP";          // the dual form's strongest reuse (default: tP)
   p.amg.setup_interval = 3;
   auto sys = make_system("bar_hang", 4, 5);
   auto solver = make_linear_solver(name, p);
@@ -191,7 +193,7 @@ TEST(ExternalSolverParams, MueLuChoicesMapToParameterList) {
   EXPECT_TRUE(has("relaxation: sweeps = 3")) << t;
   EXPECT_TRUE(has("coarse: max size = 77")) << t;
   EXPECT_TRUE(has("max levels = 6")) << t;
-  EXPECT_TRUE(has("reuse: type = RP")) << t;
+  EXPECT_TRUE(has("reuse: type = tP")) << t;
   set_param(p, "muelu.smoother", "chebyshev", "test");
   set_param(p, "muelu.algorithm", "unsmoothed", "test");
   const std::string c = muelu_parameter_text(p);
@@ -202,6 +204,21 @@ TEST(ExternalSolverParams, MueLuChoicesMapToParameterList) {
 
 // The strength threshold really reaches BoomerAMG: a stricter threshold keeps fewer strong
 // connections, so the hierarchy changes (and both still solve).
+// On the primal form's K, Trilinos 13.2's RP reuse throws inside its coarse-operator product on
+// the first reuse; the run stops at the first setup with a message that names the key, and the
+// default (tP) runs the same scene to its end.
+TEST(ExternalSolverParams, MueLuRpReuseRefusedOnPrimalForm) {
+  Params p = resolve_params("bar_hang", {"resolution=2", "form=primal", "max_iterations=5", "muelu.reuse=RP"});
+  const Problem prob = build_problem(p);
+  const RunResult refused = run_simulation(prob, p, "muelu");
+  EXPECT_EQ(refused.status, "error");
+  EXPECT_NE(refused.message.find("muelu.reuse = RP"), std::string::npos) << refused.message;
+  set_param(p, "muelu.reuse", "tP", "test");
+  const RunResult ok = run_simulation(prob, p, "muelu");
+  EXPECT_NE(ok.status, "error") << ok.message;
+  EXPECT_EQ(ok.outer_iterations, 5);
+}
+
 TEST(ExternalSolverParams, StrengthThresholdChangesBoomerAmgHierarchy) {
   auto sys = make_system("bar_hang", 4, 3);
   std::vector<double> complexity;
