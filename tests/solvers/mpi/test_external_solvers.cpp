@@ -204,9 +204,8 @@ TEST(ExternalSolverParams, MueLuChoicesMapToParameterList) {
 
 // The strength threshold really reaches BoomerAMG: a stricter threshold keeps fewer strong
 // connections, so the hierarchy changes (and both still solve).
-// On the primal form's K, Trilinos 13.2's RP reuse throws inside its coarse-operator product on
-// the first reuse; the run stops at the first setup with a message that names the key, and the
-// default (tP) runs the same scene to its end.
+// On K, Trilinos 13.2's RP reuse throws on its first reuse: refused at the first setup with a
+// message naming the key; the default (tP) runs the same scene to its end.
 TEST(ExternalSolverParams, MueLuRpReuseRefusedOnPrimalForm) {
   Params p = resolve_params("bar_hang", {"resolution=2", "form=primal", "max_iterations=5", "muelu.reuse=RP"});
   const Problem prob = build_problem(p);
@@ -215,8 +214,7 @@ TEST(ExternalSolverParams, MueLuRpReuseRefusedOnPrimalForm) {
   EXPECT_NE(refused.message.find("muelu.reuse = RP"), std::string::npos) << refused.message;
   set_param(p, "muelu.reuse", "tP", "test");
   const RunResult ok = run_simulation(prob, p, "muelu");
-  EXPECT_NE(ok.status, "error") << ok.message;
-  EXPECT_EQ(ok.outer_iterations, 5);
+  EXPECT_TRUE(ok.status != "error" && ok.outer_iterations == 5) << ok.status << ": " << ok.message;
 }
 
 TEST(ExternalSolverParams, StrengthThresholdChangesBoomerAmgHierarchy) {
