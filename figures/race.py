@@ -60,6 +60,11 @@ def set_args(sets):
 
 # Flags every run gets: --quiet when the race is (no live status line from xpbd-bench run).
 RUN_FLAGS = []
+# Each method at its best: CHOLMOD's BLAS on every core, as the OpenMP solvers are (the binary's
+# own default is one BLAS thread, safe on a loaded machine; at 270k on a quiet one two threads
+# factor 1.5x faster: docs/race.md). Runs record it as blas_threads; a value you set is kept.
+RUN_ENV = dict(os.environ)
+RUN_ENV.setdefault("OPENBLAS_NUM_THREADS", str(os.cpu_count() or 1))
 
 
 def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
@@ -74,7 +79,7 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
         if os.path.exists(part_of(path)):
             os.remove(part_of(path))
         t0 = time.time()
-        done = subprocess.run(cmd, stdout=subprocess.DEVNULL)
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, env=RUN_ENV)
         if done.returncode != 0 or not os.path.exists(part_of(path)):
             print(f"race: exit {done.returncode}; nothing recorded for {path}", file=sys.stderr)
             return None
