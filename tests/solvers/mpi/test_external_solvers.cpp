@@ -202,8 +202,6 @@ TEST(ExternalSolverParams, MueLuChoicesMapToParameterList) {
   EXPECT_NE(c.find("multigrid algorithm = unsmoothed"), std::string::npos) << c;
 }
 
-// The strength threshold really reaches BoomerAMG: a stricter threshold keeps fewer strong
-// connections, so the hierarchy changes (and both still solve).
 // On K, Trilinos 13.2's RP reuse throws on its first reuse: refused at the first setup with a
 // message naming the key; the default (tP) runs the same scene to its end.
 TEST(ExternalSolverParams, MueLuRpReuseRefusedOnPrimalForm) {
@@ -217,6 +215,8 @@ TEST(ExternalSolverParams, MueLuRpReuseRefusedOnPrimalForm) {
   EXPECT_TRUE(ok.status != "error" && ok.outer_iterations == 5) << ok.status << ": " << ok.message;
 }
 
+// The strength threshold really reaches BoomerAMG: a stricter threshold keeps fewer strong
+// connections, so the hierarchy changes (and both still solve).
 TEST(ExternalSolverParams, StrengthThresholdChangesBoomerAmgHierarchy) {
   auto sys = make_system("bar_hang", 4, 3);
   std::vector<double> complexity;
