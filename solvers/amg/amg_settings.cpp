@@ -45,7 +45,7 @@ const SettingTable<amg::AmgOptions>& amg_settings() {
       setting("amg.setup_interval", "frames between rebuilds of aggregates and P", &S::setup_interval, 1, 1e9),
       setting("amg.max_coarse", "stop coarsening at this many rows", &S::max_coarse, 1, 1e9),
       setting("amg.max_levels", "maximum number of levels", &S::max_levels, 1, 64),
-      setting("amg.precision", "storage of the V-cycle's matrices and vectors: double | single (float, as the authors ran; CG and the coarsest solve stay double; polynomial smoothers only)", &S::precision, {"double", "single"}),
+      setting("amg.precision", "storage of the V-cycle's matrices and vectors: auto (single with the polynomial smoothers, double with gs / block_gs) | double | single (float, as the authors ran; CG and the coarsest solve stay double; polynomial smoothers only)", &S::precision, {"auto", "double", "single"}),
   };
   return table;
 }
@@ -68,7 +68,9 @@ AmgOptions resolve_options(const AmgOptions& opt, const MatrixInfo& info) {
     throw Error("amg.jacobi_omega=level0 needs amg.smoother jacobi or chebyshev (the smoother is " + o.smoother.kind + ")");
   if (o.smoother.sweeps == 0) o.smoother.sweeps = block ? kBlockSmootherSweeps : 1;
   if (o.smoother.degree == 0) o.smoother.degree = block ? kBlockChebyshevDegree : 3;
-  if (o.precision == "single" && (o.smoother.kind == "gs" || o.smoother.kind == "block_gs"))
+  const bool gauss_seidel = o.smoother.kind == "gs" || o.smoother.kind == "block_gs";
+  if (o.precision == "auto") o.precision = gauss_seidel ? "double" : "single";
+  if (o.precision == "single" && gauss_seidel)
     throw Error("amg.precision=single runs the polynomial smoothers (jacobi, chebyshev, block_jacobi, block_chebyshev), not amg.smoother=" +
                 o.smoother.kind);
   return o;

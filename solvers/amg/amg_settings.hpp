@@ -56,8 +56,11 @@ struct AmgOptions {
   std::string coarse_solver = "direct";    // direct (Cholesky) | smoother (the level's smoother from zero)
   std::string jacobi_omega = "per_level";  // per_level | level0 (level 0's λ_max(D⁻¹A) on every level)
   // Storage of the V-cycle: "double", or "single" (float copies of every level's A, P, R and of
-  // its polynomial smoother, made at setup and refresh; the coarsest solve stays double).
-  std::string precision = "double";
+  // its polynomial smoother, made at setup and refresh; CG and the coarsest solve stay double).
+  // auto: single with the polynomial smoothers, double with the Gauss–Seidel kinds (which have
+  // no float form). The race chose single: the V-cycle is bandwidth-bound, and at 315K tets the
+  // float one made a frame 25-29% faster for the same iterations (docs/race.md).
+  std::string precision = "auto";
 };
 
 // What amg.smoother = auto, amg.smoother_sweeps = 0 and amg.chebyshev_degree = 0 take on block

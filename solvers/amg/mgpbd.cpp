@@ -95,6 +95,7 @@ class MgpbdSolver final : public LinearSolver {
     s["levels"] = h_.num_levels();
     s["operator_complexity"] = h_.operator_complexity();
     s["grid_complexity"] = h_.grid_complexity();
+    s["single_precision"] = h_.options().precision == "single";  // amg.precision as resolved
     s["setup_time_total"] = setup_time_total_;
     s["refresh_time_total"] = refresh_time_total_;
     s["setup_count"] = setup_count_;

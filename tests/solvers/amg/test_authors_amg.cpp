@@ -26,6 +26,7 @@ AmgOptions jacobi_options() {
   o.smoother.sweeps = 2;
   o.strength_threshold = 0.0;
   o.max_coarse = 50;
+  o.precision = "double";  // the tests compare with double algebra (auto would run the V-cycle in float)
   return o;
 }
 

@@ -26,6 +26,7 @@ double rel(const Vector& a, const Vector& b) { return (a - b).norm() / b.norm();
 // V-cycles of A b in double and single precision, and their relative difference.
 double vcycle_difference(const SparseMatrix& A, const Vector& b, AmgOptions o, const MatrixInfo& info) {
   Hierarchy hd, hs;
+  o.precision = "double";
   hd.setup(A, o, info);
   o.precision = "single";
   hs.setup(A, o, info);
@@ -66,6 +67,7 @@ TEST(AmgSinglePrecision, RefreshUpdatesTheFloatCopies) {
   const auto s = xb::test::scene_system("cloth_hang", 24, 1);
   AmgOptions o;
   o.max_coarse = 50;
+  o.precision = "double";
   Hierarchy hd, hs;
   hd.setup(s.ds->A(), o);
   o.precision = "single";

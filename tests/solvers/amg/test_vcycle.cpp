@@ -27,6 +27,7 @@ TEST(AmgVcycle, SymmetricPositiveDefiniteForEverySmoother) {
       o.near_kernel.kind = nk;
       o.near_kernel.vectors = 2;
       o.max_coarse = 50;
+      o.precision = "double";  // symmetric to 1e-10, below float's round-off (auto: single)
       for (const SparseMatrix* A : {&cloth.ds->A(), &bar.ds->A(), &P2}) {
         Hierarchy h;
         h.setup(*A, o);
@@ -64,6 +65,7 @@ TEST(AmgBlockVcycle, SymmetricPositiveDefiniteForEverySmoother) {
           o.prolongator_diagonal = diag;
           o.smoother.kind = sm;
           o.max_coarse = 30;
+          o.precision = "double";  // symmetric to 1e-10, below float's round-off (auto: single)
           Hierarchy h;
           h.setup(c->K, o, {3, &c->rigid});
           ASSERT_GE(h.num_levels(), 3);
