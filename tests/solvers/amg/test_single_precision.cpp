@@ -6,6 +6,7 @@
 #include "harness/params.hpp"
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/kernels.hpp"
+#include "solvers/linear_solver.hpp"
 
 #include "amg_test_support.hpp"
 #include "test_amg_primal.hpp"
@@ -175,4 +176,27 @@ TEST(AmgSinglePrecision, GaussSeidelKindsAndUnknownNamesAreRefused) {
   EXPECT_THROW(set_param(p, "amg.precision", "half", "test"), Error);
   set_param(p, "amg.precision", "single", "test");
   EXPECT_EQ(p.amg.precision, "single");
+}
+
+// The default, auto: float with the polynomial smoothers (the auto smoother is one), double with
+// the Gauss–Seidel kinds; the solver's statistic says which ran.
+TEST(AmgSinglePrecision, AutoIsSingleWithPolynomialSmoothersAndDoubleWithGaussSeidel) {
+  AmgOptions o;
+  EXPECT_EQ(o.precision, "auto");
+  for (const std::string sm : {"auto", "jacobi", "chebyshev", "block_jacobi", "block_chebyshev"}) {
+    o.smoother.kind = sm;
+    EXPECT_EQ(resolve_options(o, {3, nullptr}).precision, "single") << sm;
+  }
+  for (const std::string sm : {"gs", "block_gs"}) {
+    o.smoother.kind = sm;
+    EXPECT_EQ(resolve_options(o, {3, nullptr}).precision, "double") << sm;
+  }
+  const auto s = xb::test::scene_system("cloth_hang", 16, 1);
+  for (const std::string sm : {"chebyshev", "gs"}) {
+    Params p;
+    set_param(p, "amg.smoother", sm, "test");
+    auto solver = make_linear_solver("mgpbd", p);
+    solver->setup(s.ds->A(), SetupKind::Structure, SetupContext{});
+    EXPECT_EQ(solver->statistics().at("single_precision"), sm == "chebyshev" ? 1.0 : 0.0) << sm;
+  }
 }
