@@ -65,43 +65,47 @@ def machine_description(build):
     return m
 
 
-def run_metrics(build, extra_args=()):
-    exe = os.path.join(build, "xb_perf_metrics")
+def tool(build, name):
+    exe = os.path.join(build, name)
     if not os.path.exists(exe):
-        sys.exit(f"perf: {exe} not found (build it: ninja -C {build} xb_perf_metrics)")
+        sys.exit(f"perf: {exe} not found (build it: ninja -C {build} {name})")
+    return exe
+
+
+def run_json(name, command, **run_args):
+    """Runs command(out) with `out` a temporary JSON file and returns what it wrote; a failure exits
+    with the tail of its stderr when that was captured."""
     with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as t:
         out = t.name
     try:
-        r = subprocess.run([exe, "--out", out, *extra_args], cwd=ROOT, text=True, stderr=subprocess.PIPE)
+        r = subprocess.run(command(out), cwd=ROOT, **run_args)
         if r.returncode != 0:
-            sys.exit(f"perf: xb_perf_metrics failed (exit {r.returncode}):\n{r.stderr[-4000:]}")
+            detail = f":\n{r.stderr[-4000:]}" if r.stderr else ""
+            sys.exit(f"perf: {name} failed (exit {r.returncode}){detail}")
         with open(out) as f:
             return json.load(f)
     finally:
         os.unlink(out)
+
+
+def run_metrics(build, extra_args=()):
+    exe = tool(build, "xb_perf_metrics")
+    return run_json("xb_perf_metrics", lambda out: [exe, "--out", out, *extra_args],
+                    text=True, stderr=subprocess.PIPE)
 
 
 def run_benchmarks(build, short, threads, bench_filter=None):
-    exe = os.path.join(build, "xb_microbench")
-    if not os.path.exists(exe):
-        sys.exit(f"perf: {exe} not found (build it: ninja -C {build} xb_microbench)")
-    with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as t:
-        out = t.name
-    cmd = [exe, f"--benchmark_out={out}", "--benchmark_out_format=json",
-           "--xb_sizes=" + ("small" if short else "all"),
-           "--benchmark_min_time=" + ("0.02" if short else "0.1"), "--benchmark_repetitions=3"]
-    if bench_filter:
-        cmd.append(f"--benchmark_filter={bench_filter}")
+    exe = tool(build, "xb_microbench")
+
+    def command(out):
+        cmd = [exe, f"--benchmark_out={out}", "--benchmark_out_format=json",
+               "--xb_sizes=" + ("small" if short else "all"),
+               "--benchmark_min_time=" + ("0.02" if short else "0.1"), "--benchmark_repetitions=3"]
+        return cmd + ([f"--benchmark_filter={bench_filter}"] if bench_filter else [])
+
     env = dict(os.environ, OMP_NUM_THREADS=str(threads), OPENBLAS_NUM_THREADS=str(threads))
-    try:
-        # The console table goes to stderr so that it is seen as it runs.
-        r = subprocess.run(cmd, cwd=ROOT, stdout=sys.stderr, env=env)
-        if r.returncode != 0:
-            sys.exit(f"perf: xb_microbench failed (exit {r.returncode})")
-        with open(out) as f:
-            return json.load(f)
-    finally:
-        os.unlink(out)
+    # The console table goes to stderr so that it is seen as it runs.
+    return run_json("xb_microbench", command, stdout=sys.stderr, env=env)
 
 
 def timing_field(threads):

@@ -37,23 +37,6 @@ TEST(AmgVcycle, SymmetricPositiveDefiniteForEverySmoother) {
     }
 }
 
-namespace {
-// V is symmetric (xᵀV(y) = yᵀV(x)) and positive definite (xᵀV(x) > 0) on random vectors.
-void check_spd(Hierarchy& h, const std::string& what) {
-  const long n = h.matrix(0).rows();
-  for (unsigned s = 0; s < 3; ++s) {
-    const Vector x = xb::test::random_vector(n, 100 + s), y = xb::test::random_vector(n, 200 + s);
-    Vector vx, vy;
-    h.vcycle(x, vx);
-    h.vcycle(y, vy);
-    const double xy = x.dot(vy), yx = y.dot(vx);
-    EXPECT_LE(std::abs(xy - yx), 1e-10 * std::sqrt(std::abs(x.dot(vx) * y.dot(vy)))) << what;
-    EXPECT_GT(x.dot(vx), 0) << what;
-    EXPECT_GT(y.dot(vy), 0) << what;
-  }
-}
-}  // namespace
-
 TEST(AmgBlockVcycle, SymmetricPositiveDefiniteForEverySmoother) {
   for (const auto* c : {&small_bar(), &small_cloth()})
     for (const std::string sm : {"jacobi", "chebyshev", "gs", "block_gs", "block_jacobi", "block_chebyshev"})
@@ -73,7 +56,7 @@ TEST(AmgBlockVcycle, SymmetricPositiveDefiniteForEverySmoother) {
           // Coarse levels are nodal: their nodes are the aggregates' kept columns (≤ 6 each).
           EXPECT_FALSE(h.level(1).nodes.scalar());
           EXPECT_EQ(h.level(1).nodes.node_start.back(), h.matrix(1).rows());
-          check_spd(h, sm + "/" + pr + "/" + std::to_string(c->K.rows()));
+          check_vcycle_spd(h, 3, sm + "/" + pr + "/" + std::to_string(c->K.rows()), SymmetryScale::energy);
         }
 }
 

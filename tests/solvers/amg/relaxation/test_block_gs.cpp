@@ -114,16 +114,7 @@ TEST(AmgBlockGs, VcycleWithSeveralSweepsIsSymmetricPositiveDefinite) {
       Hierarchy h;
       h.setup(bar().K, o, {3, &bar().rigid});
       ASSERT_GE(h.num_levels(), 3);
-      const long n = h.matrix(0).rows();
-      for (unsigned s = 0; s < 3; ++s) {
-        const Vector x = xb::test::random_vector(n, 300 + s), y = xb::test::random_vector(n, 400 + s);
-        Vector vx, vy;
-        h.vcycle(x, vx);
-        h.vcycle(y, vy);
-        const std::string what = sm + " x" + std::to_string(sweeps);
-        EXPECT_LE(std::abs(x.dot(vy) - y.dot(vx)), 1e-10 * std::sqrt(x.dot(vx) * y.dot(vy))) << what;
-        EXPECT_GT(x.dot(vx), 0) << what;
-      }
+      xb::test::check_vcycle_spd(h, 3, sm + " x" + std::to_string(sweeps), xb::test::SymmetryScale::energy);
     }
 }
 
