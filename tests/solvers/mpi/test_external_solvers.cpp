@@ -202,13 +202,14 @@ TEST(ExternalSolverParams, MueLuChoicesMapToParameterList) {
   EXPECT_NE(c.find("multigrid algorithm = unsmoothed"), std::string::npos) << c;
 }
 
-// On K, Trilinos 13.2's RP reuse throws on its first reuse: refused at the first setup with a
-// message naming the key; the default (tP) runs the same scene to its end.
+// On K, Trilinos 13.2's RP reuse throws: the first reuse is refused with a message naming the key
+// (a one-off solve, which builds, is not); the default (tP) runs the same scene to its end.
 TEST(ExternalSolverParams, MueLuRpReuseRefusedOnPrimalForm) {
   Params p = resolve_params("bar_hang", {"resolution=2", "form=primal", "max_iterations=5", "muelu.reuse=RP"});
   const Problem prob = build_problem(p);
   const RunResult refused = run_simulation(prob, p, "muelu");
   EXPECT_EQ(refused.status, "error");
+  EXPECT_EQ(refused.outer_iterations, 1);  // the first setup built and solved
   EXPECT_NE(refused.message.find("muelu.reuse = RP"), std::string::npos) << refused.message;
   set_param(p, "muelu.reuse", "tP", "test");
   const RunResult ok = run_simulation(prob, p, "muelu");
