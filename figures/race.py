@@ -2,23 +2,26 @@
 """`make race`: the simulation-level race of figures/race/race.toml, one process per run.
 
 usage: python3 figures/race.py [--bench build/xpbd-bench] [--spec figures/race/race.toml]
-                               [--out plots/race] [--only squash,cloth_hang] [--sizes 0,1]
+                               [--out plots/race] [--quick | --sizes 0,1] [--only squash,cloth_hang]
                                [--methods mgpbd,cholmod] [--fresh] [--dry-run] [--quiet]
 
 Every run is `xpbd-bench run` in a process of its own (a later run in the same process would reuse
-the earlier one's freed pages), into OUT/data/<scene>/<size>/<method>.<form>.<forcing>.h5; a file
-that exists is a finished run and is not run again (--fresh starts over). Per scene, each global
-method's form is chosen at the smallest size (both forms run there with linear.forcing = fixed;
-the one with the lower time per outer iteration wins) and kept for the larger sizes. Exact CHOLMOD
-runs first at each size; every other entry then races to the relative dual residual it ended the
-frame at (rtol = that residual, at most `overrun` times the frame's outer iterations, at most
-`budget_factor` times its wall time). Then plots/race.py draws OUT/race_<scene>.png,
-OUT/race_crossover.png and writes OUT/summary.md. On a terminal each run shows its live status
-line (xpbd-bench run's, on the inherited stderr); --quiet: none.
+the earlier one's freed pages), into OUT/data/<scene>/<size>/<method>.<form>.<forcing>.h5; a run
+whose process wrote none leaves a .failed.json record (its exit code and last words) instead. A
+file or record that exists is a finished entry and is not run again (--fresh starts over).
+--quick (`make race`): each scene's `quick_size` of the spec only; without it (`make race-full`)
+every size. The rules (each method's form, the target, what finished) are plots/race_rules.py's:
+both forms run at the smallest size with linear.forcing = fixed and the finished one faster per
+outer iteration wins (primal if neither finished). Exact CHOLMOD runs first at each size; every
+other entry then races to the relative dual residual it ended the frame at (rtol = that residual,
+at most `overrun` times the frame's outer iterations, at most `budget_factor` times its wall
+time). Then plots/race.py draws the figures and writes OUT/summary.md. On a terminal each run
+shows its live status line (xpbd-bench run's, on the inherited stderr); --quiet or no terminal:
+none, and stderr is kept for the failure record.
 """
 import argparse
+import json
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -29,14 +32,18 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "plots"))
 import race as race_plots  # noqa: E402
+import race_rules as rules  # noqa: E402
 import xbruns  # noqa: E402
 
 LOCAL_MAX_ITERATIONS = 100000  # a sweep method stops on its time budget, not on a count
 
 
 def run_file(out, scene, size, method, form, forcing):
-    safe = re.sub(r"[^A-Za-z0-9._-]", "_", size)
-    return os.path.join(out, "data", scene, safe, f"{method}.{form}.{forcing}.h5")
+    return os.path.join(out, "data", scene, race_plots.safe_name(size), f"{method}.{form}.{forcing}.h5")
+
+
+def failed_file(path):
+    return path[:-3] + ".failed.json"
 
 
 def part_of(path):
@@ -67,11 +74,16 @@ RUN_ENV = dict(os.environ)
 RUN_ENV.setdefault("OPENBLAS_NUM_THREADS", str(os.cpu_count() or 1))
 
 
-def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
-    """Runs one race entry into `path` (skipped if it exists). Returns the run's dict or None."""
+def run_one(bench, path, scene, solver, form, sets, budget, dry_run, reference=False):
+    """Runs one race entry into `path` (skipped if it or its failure record exists). Returns the run's
+    dict, a failure record's (attrs only, status failed) or None (dry run)."""
+    if os.path.exists(failed_file(path)):
+        with open(failed_file(path)) as fh:
+            return {"attrs": json.load(fh)}
     if not os.path.exists(path):
         cmd = [bench, "run", "--scene", scene, "--solver", solver, "--time-budget", f"{budget:g}",
-               *(["--form", form] if form != "none" else []), *set_args(sets), *RUN_FLAGS, "--out", part_of(path)]
+               *(["--form", form] if form != "none" else []), *(["--reference"] if reference else []),
+               *set_args(sets), *RUN_FLAGS, "--out", part_of(path)]
         print("race:", " ".join(cmd), flush=True)
         if dry_run:
             return None
@@ -79,13 +91,20 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run):
         if os.path.exists(part_of(path)):
             os.remove(part_of(path))
         t0 = time.time()
-        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, env=RUN_ENV)
-        if done.returncode != 0 or not os.path.exists(part_of(path)):
-            print(f"race: exit {done.returncode}; nothing recorded for {path}", file=sys.stderr)
-            return None
+        live = sys.stderr.isatty() and "--quiet" not in RUN_FLAGS
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=None if live else subprocess.PIPE, env=RUN_ENV,
+                              text=True)
+        seconds = time.time() - t0
+        # A run the binary recorded (whatever its status, error included) is kept; one that left
+        # nothing (killed, out of memory, refused) gets a record, and its row in the summary.
+        if not os.path.exists(part_of(path)):
+            said = (done.stderr or "").strip()[-2000:] if not live else "see the race's stderr"
+            print(f"race: exit {done.returncode}; no run recorded for {path}: {said}", file=sys.stderr)
+            race_plots.failure_record(failed_file(path), cmd, done.returncode, said, seconds)
+            return {"attrs": {"status": "failed", "exit": done.returncode, "message": said}}
         os.replace(part_of(path), path)
-        print(f"race: {time.time() - t0:.1f} s", flush=True)
-    runs = xbruns.load(path, datasets=race_plots.DATASETS)
+        print(f"race: {seconds:.1f} s (exit {done.returncode}, load {os.getloadavg()[0]:.2f})", flush=True)
+    runs = xbruns.load(path, datasets=race_plots.datasets())
     return runs[-1] if runs else None
 
 
@@ -96,10 +115,12 @@ def budget(spec, exact):
     return min(spec["time_budget"], max(10.0, spec.get("budget_factor", 4) * exact["time"]))
 
 
-def entry_sets(spec, scene, size, m, forcing, exact):
-    """The --set keys of one entry. Once exact CHOLMOD has run at this size, the others race to its
+def entry_sets(spec, scene, size, name, forcing, exact):
+    """The --set keys of one entry: the scene's, the size's, the method's and the scene's own for
+    that method (`method_set`). Once exact CHOLMOD has run at this size, the others race to its
     end-of-frame residual: rtol = that residual, at most `overrun` times the frame's iterations."""
-    sets = sets_of(scene.get("set"), size.get("set"), m.get("set"))
+    m = spec["methods"][name]
+    sets = sets_of(scene.get("set"), size.get("set"), m.get("set"), scene.get("method_set", {}).get(name))
     if forcing:
         sets["linear.forcing"] = forcing
     if exact is not None:
@@ -111,50 +132,66 @@ def entry_sets(spec, scene, size, m, forcing, exact):
 
 
 def exact_of(r):
-    """Exact CHOLMOD's frame: its wall time and the relative dual residual it ends at."""
-    if r is None or r["attrs"].get("status") not in ("ok", "max_iterations"):
+    """Exact CHOLMOD's frame: its wall time and the relative dual residual it ends at (the rules'
+    target); None where it did not finish."""
+    if not rules.finished(r):
         return None
-    return {"time": float(r["attrs"]["wall_time"]), "target": float(r["attrs"]["relative_dual_residual"])}
+    return {"time": float(r["attrs"]["wall_time"]), "target": rules.target(r)}
 
 
-def choose_form(args, spec, scene_name, scene, size, name, m, exact):
-    """The form of method `name` for this scene: both forms at the smallest size, the faster per
-    outer iteration (fixed forcing). Returns the form and that form's run."""
-    timing, runs = {}, {}
+def choose_form(args, spec, scene_name, scene, size, name, exact):
+    """The form of method `name` for this scene (rules.choose_form): both forms at the smallest
+    size with fixed forcing. Returns the form and that form's run."""
+    runs = {}
+    m = spec["methods"][name]
     for form in ("dual", "primal"):
-        sets = entry_sets(spec, scene, size, m, "fixed", exact)
+        sets = entry_sets(spec, scene, size, name, "fixed", exact)
         path = run_file(args.out, scene_name, size["label"], name, form, "fixed")
-        r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run)
-        if r is not None and r["attrs"].get("status") in ("ok", "max_iterations") and r["attrs"]["outer_iterations"] > 0:
-            timing[form] = float(r["attrs"]["wall_time"]) / float(r["attrs"]["outer_iterations"])
-            runs[form] = r
-    form = min(timing, key=timing.get) if timing else "primal"
+        runs[form] = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run,
+                             scene.get("reference", False))
+    form = rules.choose_form(runs)
     return form, runs.get(form)
+
+
+def size_indices(args, scene):
+    """The sizes to run: --sizes, or with --quick the scene's quick_size (default its first)."""
+    sizes = scene["sizes"]
+    if args.quick:
+        labels = [z["label"] for z in sizes]
+        quick = scene.get("quick_size", labels[0])
+        if quick not in labels:
+            sys.exit(f"race spec: quick_size {quick!r} is not one of the scene's sizes ({', '.join(labels)})")
+        return [labels.index(quick)]
+    chosen = [int(i) for i in args.sizes.split(",")] if args.sizes else list(range(len(sizes)))
+    bad = [i for i in chosen if not 0 <= i < len(sizes)]
+    if bad:
+        sys.exit(f"--sizes: no size {bad[0]} (the scene has {len(sizes)})")
+    return chosen
 
 
 def run_scene(args, spec, scene_name, scene):
     """Every entry of one scene; exact CHOLMOD first at each size (the others race to its residual)."""
     sizes = scene["sizes"]
-    chosen = [int(i) for i in args.sizes.split(",")] if args.sizes else range(len(sizes))
     methods = {k: v for k, v in spec["methods"].items() if not args.methods or k in args.methods.split(",")}
     order = sorted(methods, key=lambda k: k != "cholmod")
     forms, exact = {}, None
     for name in order:
         if not methods[name].get("local"):
-            forms[name], r = choose_form(args, spec, scene_name, scene, sizes[0], name, methods[name], exact)
+            forms[name], r = choose_form(args, spec, scene_name, scene, sizes[0], name, exact)
             if name == "cholmod":
                 exact = exact_of(r)
     print(f"race: {scene_name} forms: " + ", ".join(f"{k} {v}" for k, v in forms.items()), flush=True)
-    for i in chosen:
+    for i in size_indices(args, scene):
         size, exact = sizes[i], None
         for name in order:
             m = methods[name]
             form = "none" if m.get("local") else forms[name]
-            rules = ["none"] if m.get("local") else spec["forcing"] if m.get("forcing", True) else ["fixed"]
-            for forcing in rules:
-                sets = entry_sets(spec, scene, size, m, None if forcing == "none" else forcing, exact)
+            rules_ = ["none"] if m.get("local") else spec["forcing"] if m.get("forcing", True) else ["fixed"]
+            for forcing in rules_:
+                sets = entry_sets(spec, scene, size, name, None if forcing == "none" else forcing, exact)
                 path = run_file(args.out, scene_name, size["label"], name, form, forcing)
-                r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run)
+                r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run,
+                            scene.get("reference", False))
                 if name == "cholmod":
                     exact = exact_of(r)
     return forms
@@ -177,8 +214,11 @@ def check_spec(bench, spec):
     for name, sc in spec["scenes"].items():
         if sc.get("scene") not in names["scenes"]:
             bad.append(f"scenes.{name}: unknown scene {sc.get('scene')!r}")
-        for t in [sc.get("set", {})] + [z.get("set", {}) for z in sc.get("sizes", [])]:
+        for t in [sc.get("set", {})] + [z.get("set", {}) for z in sc.get("sizes", [])] + \
+                list(sc.get("method_set", {}).values()):
             bad += [f"scenes.{name}: unknown key {k!r}" for k in t if k not in names["keys"]]
+        bad += [f"scenes.{name}.method_set: unknown method {k!r}" for k in sc.get("method_set", {})
+                if k not in spec["methods"]]
     if bad:
         sys.exit("race spec: " + "; ".join(bad))
 
@@ -190,6 +230,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "plots", "race"))
     ap.add_argument("--only", default="", help="comma-separated scene names of the spec")
     ap.add_argument("--sizes", default="", help="comma-separated size indices (0 = smallest)")
+    ap.add_argument("--quick", action="store_true", help="each scene's quick_size only (make race)")
     ap.add_argument("--methods", default="", help="comma-separated method labels of the spec")
     ap.add_argument("--fresh", action="store_true", help="delete OUT/data first")
     ap.add_argument("--dry-run", action="store_true", help="print the commands only")
