@@ -1,34 +1,39 @@
 #!/usr/bin/env python3
 """Every repository path named in a comment or a doc exists (a ctest).
 
-Reads the comments of C++ and Python files and every Markdown file; a token that looks like a
-path under one of the project's folders (core/, problems/, solvers/, harness/, ..., or a path
-relative to the file's own folder) must name a file or folder that exists. Placeholders (an
-upper-case word such as NAME or X, `...`), generated outputs (GENERATED) and the shared folder
-outside the repository (shared/) are not checked.
+Reads the comments of C++ and Python files and every Markdown file the repository tracks (`git
+ls-files`; every such file under ROOT where git is not there), generated pages committed as
+snapshots included; a token that looks like a path under one of the project's folders (core/,
+problems/, solvers/, harness/, ..., or a path relative to the file's own folder) must name a file
+or folder that exists. Placeholders (an upper-case word such as NAME or X, `...`), generated
+outputs (GENERATED) and the shared folder outside the repository (shared/) are not checked.
 
 usage: python3 tests/test_paths.py [--root DIR]
 """
 import argparse
 import os
 import re
+import subprocess
 import sys
+
+CHECKED = (".cpp", ".hpp", ".py", ".md", ".toml", ".sh", "CMakeLists.txt", "Makefile")
 
 PATH = re.compile(r"(?<![\w./-])((?:\.\./|\./)?(?:[\w.-]+/)+[\w.-]+\.(?:hpp|cpp|py|md|toml|json|sh|txt|tsv))\b")
 TOPS = {"core", "problems", "solvers", "harness", "bench", "tests", "plots", "scripts", "figures", "docs", "results",
         "fuzz", ".ci"}
 # written by a command, not tracked
-GENERATED = ("plots/figures/", "results/perf/", "results/forms/")
-# snapshots of generated pages: they name what ran then
-SNAPSHOTS = {"docs/figures_summary.md"}
+GENERATED = ("plots/figures/", "plots/race/", "results/perf/", "results/forms/")
 
 
 def comment_lines(path, text):
     """(line number, text) of the lines a reader takes as prose: all of a Markdown file, the
-    comments of C++ and Python (not #include lines)."""
+    comments of C++ and Python (not #include lines), of TOML, shell, CMake and the Makefile."""
     for n, line in enumerate(text.split("\n"), 1):
         if path.endswith(".md"):
             yield n, line
+        elif path.endswith((".toml", ".sh", "CMakeLists.txt", "Makefile")):
+            if "#" in line:
+                yield n, line[line.index("#"):]
         elif path.endswith(".py"):
             if "#" in line or '"""' in line or not line.startswith((" ", "\t")) or line.strip().startswith(("-", "usage")):
                 yield n, line
@@ -38,8 +43,6 @@ def comment_lines(path, text):
 
 def broken(root, path):
     rel = os.path.relpath(path, root)
-    if rel in SNAPSHOTS:
-        return []
     with open(path, encoding="utf-8", errors="replace") as fh:
         text = fh.read()
     out = []
@@ -70,16 +73,29 @@ def broken(root, path):
     return out
 
 
+def files(root):
+    """The checked files: those git tracks (and untracked ones not ignored), else all under root."""
+    try:
+        out = subprocess.run(["git", "-C", root, "ls-files", "--cached", "--others", "--exclude-standard"],
+                             capture_output=True, text=True, check=True).stdout.split("\n")
+        listed = [os.path.join(root, f) for f in out if f.endswith(CHECKED) and not f.startswith("shared/")]
+        return sorted(f for f in listed if os.path.isfile(f))
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    found = []
+    for d, dirs, names in os.walk(root):
+        dirs[:] = sorted(x for x in dirs if not x.startswith(".") and not x.startswith("build") and x != "shared")
+        found += [os.path.join(d, f) for f in sorted(names) if f.endswith(CHECKED)]
+    return found
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--root", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     a = ap.parse_args()
     problems = []
-    for d, dirs, files in os.walk(a.root):
-        dirs[:] = sorted(x for x in dirs if not x.startswith(".") and not x.startswith("build") and x != "shared")
-        for f in sorted(files):
-            if f.endswith((".cpp", ".hpp", ".py", ".md")):
-                problems += broken(a.root, os.path.join(d, f))
+    for path in files(a.root):
+        problems += broken(a.root, path)
     for p in problems:
         print(p)
     print(f"paths: {len(problems)} problem(s)")
