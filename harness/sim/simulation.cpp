@@ -209,7 +209,7 @@ void Simulation::substep(int frame, int sub) {
     if (it >= p_.max_iterations) break;
     if (over_budget(excluded_)) break;
     Timer step_clock;
-    if (!step(frame, sub, it, stop_metric, last)) break;
+    if (!step(frame, sub, it, dual, last)) break;  // the forcing rule reads the dual residual
     project_onto_planes(prob_, P.x);
     last.time = step_clock.seconds();
     ++res_.outer_iterations;

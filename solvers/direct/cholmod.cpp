@@ -184,21 +184,35 @@ class CholmodSolver final : public LinearSolver {
     return st;
   }
 
+  // CHOLMOD's solve failed inside the preconditioner (out of memory): caught in solve_lagged.
+  struct SolveFailed {};
+
   // CG preconditioned by the factor; with an old factor at most lagged_max_iterations, then a
-  // new factor and CG again on what is left (b − Ax), judged against the original b.
+  // new factor and CG again on what is left (b − Ax), judged against the original b. A failed
+  // factorisation or CHOLMOD solve ends it as a breakdown.
   LinearStats solve_lagged(const Vector& b, Vector& x) {
     Timer t;
+    LinearStats st;
+    try {
+      st = lagged_cg(b, x, t);
+    } catch (const SolveFailed&) {
+      st.status = LinearStatus::breakdown;
+      st.message = "CHOLMOD solve failed (out of memory?)";
+      x = Vector::Zero(b.size());
+    }
+    st.solve_time = t.seconds();
+    return st;
+  }
+
+  LinearStats lagged_cg(const Vector& b, Vector& x, const Timer& t) {
     const double bnorm = norm2(b);
     const RelativeResidual judge = rel_ ? rel_ : RelativeResidual([bnorm](const Vector& r) { return norm2(r) / bnorm; });
     Preconditioner M = [this](const Vector& r, Vector& z) {
-      if (!apply_factor(r, z)) throw Error("CHOLMOD solve failed");
+      if (!apply_factor(r, z)) throw SolveFailed{};
     };
     const bool stale = !fresh_;
     LinearStats st = pcg(*A_, b, x, M, tolerance(), stale ? lagged_max_ : max_iterations_, judge, natural_);
-    if (st.status != LinearStatus::max_iterations || !stale) {
-      st.solve_time = t.seconds();
-      return st;
-    }
+    if (st.status != LinearStatus::max_iterations || !stale) return st;
     // The old factor was not good enough: factorise A and solve for the rest.
     factorise("lagged+factorise");
     ++refactors_in_solve_;
@@ -213,8 +227,8 @@ class CholmodSolver final : public LinearSolver {
     double tol = tolerance();
     if (natural_) {  // the same stop test as one CG from zero: relative to b's natural norm
       Vector zb, zr;
-      apply_factor(b, zb);
-      apply_factor(r, zr);
+      M(b, zb);
+      M(r, zr);
       tol *= std::sqrt(std::max(0.0, dot(b, zb)) / std::max(1e-300, dot(r, zr)));
     }
     const double t0 = t.seconds();
@@ -231,7 +245,6 @@ class CholmodSolver final : public LinearSolver {
     Vector rtrue;
     residual(*A_, x, b, rtrue);
     st.final_relative_residual = judge(rtrue);
-    st.solve_time = t.seconds();
     return st;
   }
 

@@ -88,6 +88,33 @@ TEST(Forcing, SimulationRecordsAndHonoursTheSequence) {
   }
 }
 
+// With residual_metric = authors the run stops on the authors' residual, but the forcing rule is
+// fed the dual residual ‖C(x_k) + α̃λ‖ (harness/sim/forcing.hpp), as with the true metric.
+TEST(Forcing, AuthorsMetricFeedsTheDualResidual) {
+  Params p;
+  p.scene = "bar_hang";
+  p.resolution = 3;
+  p.aspect = 3;
+  p.max_iterations = 8;
+  p.rtol = 1e-10;
+  set_param(p, "residual_metric", "authors", "test");
+  set_param(p, "linear.forcing", "eisenstat_walker", "test");
+  set_param(p, "linear.forcing_max", "0.3", "test");  // at the default 0.1 both sequences sit at the cap
+  set_param(p, "linear.tol", "1e-6", "test");
+  const RunResult r = run_simulation(build_problem(p), p, "mgpbd");
+  ASSERT_NE(r.status, "error") << r.message;
+  const IterationLog& L = r.log;
+  ForcingRule dual(p.linear), authors(p.linear);
+  bool differ = false;
+  for (size_t i = 0; i + 1 < L.iteration.size(); ++i) {
+    if (L.iteration[i + 1] == 0) continue;
+    const int k = static_cast<int>(L.iteration[i]);
+    EXPECT_DOUBLE_EQ(L.linear_tolerance[i + 1], dual.next(k, L.dual_residual[i])) << "entry " << i + 1;
+    differ = differ || authors.next(k, L.authors_dual_residual[i]) != L.linear_tolerance[i + 1];
+  }
+  EXPECT_TRUE(differ) << "the authors' residual must give another sequence here";
+}
+
 #ifdef XB_WITH_HYPRE
 // A solver that cannot judge the dual residual (hypre) is refined in the primal form; at the loose
 // tolerances of eisenstat_walker each round asks for tol/d of its own residual (d the round's

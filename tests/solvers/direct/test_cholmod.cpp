@@ -84,11 +84,36 @@ TEST(CholmodLagged, DualSolveWithAnOldFactorMeetsTheTolerance) {
   }
 }
 
+namespace {
+// Dense PCG from zero on A preconditioned by the solve of M: the residual norms of its first n
+// iterations.
+std::vector<double> dense_pcg_residuals(const Eigen::MatrixXd& A, const Eigen::LDLT<Eigen::MatrixXd>& M,
+                                        const Vector& b, int n) {
+  Vector r = b, z = M.solve(r), p = z;
+  double rz = r.dot(z);
+  std::vector<double> h{r.norm()};
+  for (int k = 0; k < n; ++k) {
+    const Vector Ap = A * p;
+    const double a = rz / p.dot(Ap);
+    r -= a * Ap;
+    h.push_back(r.norm());
+    z = M.solve(r);
+    const double rz1 = r.dot(z);
+    p = z + (rz1 / rz) * p;
+    rz = rz1;
+  }
+  return h;
+}
+}  // namespace
+
 // With an iteration bound the old factor cannot meet, the solve factorises the current matrix and
-// finishes with it.
+// goes on from where the old factor's CG stopped: its history is that CG's (dense PCG here) and
+// then the new factor's, in units of ‖b‖ throughout; x = x_old + A⁻¹(b − A x_old) is the exact
+// solution (a dropped x_old or an unscaled correction would not be).
 TEST(CholmodLagged, FactorisesInsideTheSolvePastTheBound) {
+  const int bound = 2;
   Params p = bar_params(1e-11);
-  p.cholmod.lagged_max_iterations = 1;
+  p.cholmod.lagged_max_iterations = bound;
   const Problem prob = build_problem(p);
   const Eigen::VectorXd at = scaled_compliance(prob, p.dt);
   const State s1 = perturbed(prob, p, 0.01, 3), s2 = perturbed(prob, p, 0.2, 4);
@@ -109,13 +134,21 @@ TEST(CholmodLagged, FactorisesInsideTheSolvePastTheBound) {
   EXPECT_LE((x - ref).norm(), 1e-7 * ref.norm());
   EXPECT_EQ(st.residual_history.size(), st.residual_time.size());
   EXPECT_EQ(static_cast<int>(st.residual_history.size()), st.iterations + 1);
+  EXPECT_EQ(st.iterations, bound + 1) << "the new (exact) factor finishes in one iteration";
+  const std::vector<double> old_cg =
+      dense_pcg_residuals(Eigen::MatrixXd(d2.A()), Eigen::MatrixXd(d1.A()).ldlt(), b, bound);
+  ASSERT_GT(old_cg[bound], 1e-11 * b.norm()) << "the old factor must miss the tolerance in `bound` iterations";
+  for (int k = 0; k <= bound; ++k) EXPECT_NEAR(st.residual_history[k], old_cg[k], 1e-8 * old_cg[0]) << k;
+  EXPECT_LE(st.residual_history.back(), 1e-11 * b.norm());
+  for (size_t k = 1; k < st.residual_time.size(); ++k) EXPECT_GE(st.residual_time[k], st.residual_time[k - 1]) << k;
 }
 
 // Primal form: the lagged factor of K judged on the dual residual gives the exact Δλ to the
 // asked tolerance.
 TEST(CholmodLagged, PrimalSolveWithAnOldFactorMeetsTheDualTolerance) {
   for (double tol : {1e-3, 1e-8}) {
-    const Params p = bar_params(tol);
+    Params p = bar_params(tol);
+    p.cholmod.lagged_max_iterations = 1000;  // the old factor all the way (the default 30 refactorised at 1e-8)
     const Problem prob = build_problem(p);
     const Eigen::VectorXd at = scaled_compliance(prob, p.dt);
     const State s1 = perturbed(prob, p, 0.01, 3), s2 = perturbed(prob, p, 0.05, 4);
@@ -137,13 +170,20 @@ TEST(CholmodLagged, PrimalSolveWithAnOldFactorMeetsTheDualTolerance) {
     if (tol < 1e-6) {
       EXPECT_LE((dl - ref).norm(), 1e-5 * ref.norm());
     }
+    // The old factor solved it: no factorisation inside the solve, one in all.
+    EXPECT_EQ(primal.solver().statistics().at("refactorisations_in_solve"), 0) << tol;
+    EXPECT_EQ(primal.solver().statistics().at("factorisations"), 1) << tol;
+    EXPECT_EQ(primal.solver().last_setup_action(), "lagged") << tol;
   }
 }
 
 // Out of memory reads as such, with the step and the factor's size, not as a status code. Every
-// SuiteSparse allocation above 256 KB fails here (the cloth's factor is larger).
+// SuiteSparse allocation of half the factor's values or more fails here: the analysis (arrays of
+// the matrix's size) passes, the factorisation (the factor's values) does not.
 namespace {
-void* small_malloc_only(size_t n) { return n > (size_t{1} << 18) ? nullptr : std::malloc(n); }
+size_t g_largest_allowed = 0;
+void* bounded_malloc(size_t n) { return n > g_largest_allowed ? nullptr : std::malloc(n); }
+void* bounded_calloc(size_t n, size_t m) { return n * m > g_largest_allowed ? nullptr : std::calloc(n, m); }
 }  // namespace
 
 TEST(Cholmod, OutOfMemorySaysSoWithTheFactorsSize) {
@@ -155,13 +195,80 @@ TEST(Cholmod, OutOfMemorySaysSoWithTheFactorsSize) {
   ConstraintState s;
   evaluate_constraints(prob, prob.particles.x, s);
   ds.fill(s, scaled_compliance(prob, p.dt));
+  auto sized = make_linear_solver("cholmod", p);  // the factor's size, with every allocation allowed
+  sized->setup(ds.A(), SetupKind::Structure, {});
+  const double factor_nnz = sized->statistics().at("factor_nnz");
+  g_largest_allowed = static_cast<size_t>(factor_nnz * sizeof(double) / 2);
   auto solver = make_linear_solver("cholmod", p);
   void* (*saved)(size_t) = SuiteSparse_config.malloc_func;
-  SuiteSparse_config.malloc_func = small_malloc_only;
+  void* (*saved_calloc)(size_t, size_t) = SuiteSparse_config.calloc_func;
+  SuiteSparse_config.malloc_func = bounded_malloc;
+  SuiteSparse_config.calloc_func = bounded_calloc;
   solver->setup(ds.A(), SetupKind::Structure, {});
   SuiteSparse_config.malloc_func = saved;
+  SuiteSparse_config.calloc_func = saved_calloc;
   Vector x;
   const LinearStats st = solver->solve(-s.C, x);
   EXPECT_EQ(st.status, LinearStatus::breakdown);
-  EXPECT_NE(st.message.find("out of memory in CHOLMOD's"), std::string::npos) << st.message;
+  EXPECT_NE(st.message.find("out of memory in CHOLMOD's factorisation: the factor needs " +
+                            std::to_string(static_cast<long long>(factor_nnz)) + " non-zeros"),
+            std::string::npos)
+      << st.message;
+}
+
+// A CHOLMOD solve or factorisation that fails inside the lagged CG (every SuiteSparse allocation
+// after the first k fails, for each k until none does) ends the solve as a breakdown with a
+// message, never as an exception or a read of the failed solve's empty result. The energy stop
+// norm takes the branch that applies the new factor to b and r after a refactorisation.
+namespace {
+long g_allocations_left = -1;  // -1: no limit
+bool allocation_allowed() {
+  if (g_allocations_left == 0) return false;
+  if (g_allocations_left > 0) --g_allocations_left;
+  return true;
+}
+void* counted_malloc(size_t n) { return allocation_allowed() ? std::malloc(n) : nullptr; }
+void* counted_calloc(size_t n, size_t m) { return allocation_allowed() ? std::calloc(n, m) : nullptr; }
+}  // namespace
+
+TEST(CholmodLagged, FailedAllocationsInTheSolveAreABreakdown) {
+  Params p = bar_params(1e-11);
+  p.cholmod.lagged_max_iterations = 1;
+  set_param(p, "linear.stop_norm", "energy", "test");
+  const Problem prob = build_problem(p);
+  const Eigen::VectorXd at = scaled_compliance(prob, p.dt);
+  const State s1 = perturbed(prob, p, 0.01, 3), s2 = perturbed(prob, p, 0.2, 4);
+  DualSystem d1(prob), d2(prob);
+  d1.fill(s1.s, at);
+  d2.fill(s2.s, at);
+  const Vector b = -s2.s.C;
+  const Vector ref = Eigen::MatrixXd(d2.A()).ldlt().solve(b);
+  void* (*saved)(size_t) = SuiteSparse_config.malloc_func;
+  void* (*saved_calloc)(size_t, size_t) = SuiteSparse_config.calloc_func;
+  int breakdowns = 0;
+  bool completed = false;
+  for (long k = 0; k < 1000 && !completed; ++k) {
+    auto solver = make_linear_solver("cholmod", p);
+    solver->setup(d1.A(), SetupKind::Structure, {});
+    solver->setup(d2.A(), SetupKind::Values, {});
+    Vector x;
+    LinearStats st;
+    g_allocations_left = k;
+    SuiteSparse_config.malloc_func = counted_malloc;
+    SuiteSparse_config.calloc_func = counted_calloc;
+    EXPECT_NO_THROW(st = solver->solve(b, x)) << k;
+    SuiteSparse_config.malloc_func = saved;
+    SuiteSparse_config.calloc_func = saved_calloc;
+    completed = g_allocations_left > 0;  // no allocation was refused
+    g_allocations_left = -1;
+    if (st.status == LinearStatus::breakdown) {
+      ++breakdowns;
+      EXPECT_FALSE(st.message.empty()) << k;
+      EXPECT_EQ(x.size(), b.size()) << k;
+    } else {
+      EXPECT_LE((x - ref).norm(), 1e-7 * ref.norm()) << k;
+    }
+  }
+  EXPECT_TRUE(completed);
+  EXPECT_GE(breakdowns, 2) << "the old factor's solve and the refactorisation must both have failed";
 }
