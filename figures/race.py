@@ -74,6 +74,17 @@ RUN_ENV = dict(os.environ)
 RUN_ENV.setdefault("OPENBLAS_NUM_THREADS", str(os.cpu_count() or 1))
 
 
+# OUT/timings.tsv: one line per process run (start UTC, entry, s, exit code, 1-min load at start).
+TIMINGS = []
+
+
+def timing(path, t0, seconds, code, load):
+    if TIMINGS:
+        with open(TIMINGS[0], "a") as fh:
+            fh.write(f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime(t0))}\t"
+                     f"{os.path.relpath(path, os.path.dirname(TIMINGS[0]))}\t{seconds:.1f}\t{code}\t{load:.2f}\n")
+
+
 def run_one(bench, path, scene, solver, form, sets, budget, dry_run, reference=False):
     """Runs one race entry into `path` (skipped if it or its failure record exists). Returns the run's
     dict, a failure record's (attrs only, status failed) or None (dry run)."""
@@ -90,7 +101,7 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run, reference=F
         os.makedirs(os.path.dirname(path), exist_ok=True)
         if os.path.exists(part_of(path)):
             os.remove(part_of(path))
-        t0 = time.time()
+        t0, load0 = time.time(), os.getloadavg()[0]
         live = sys.stderr.isatty() and "--quiet" not in RUN_FLAGS
         done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=None if live else subprocess.PIPE, env=RUN_ENV,
                               text=True)
@@ -100,10 +111,12 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run, reference=F
         if not os.path.exists(part_of(path)):
             said = (done.stderr or "").strip()[-2000:] if not live else "see the race's stderr"
             print(f"race: exit {done.returncode}; no run recorded for {path}: {said}", file=sys.stderr)
+            timing(path, t0, seconds, done.returncode, load0)
             race_plots.failure_record(failed_file(path), cmd, done.returncode, said, seconds)
             return {"attrs": {"status": "failed", "exit": done.returncode, "message": said}}
         os.replace(part_of(path), path)
         print(f"race: {seconds:.1f} s (exit {done.returncode}, load {os.getloadavg()[0]:.2f})", flush=True)
+        timing(path, t0, seconds, done.returncode, load0)
     runs = xbruns.load(path, datasets=race_plots.datasets())
     return runs[-1] if runs else None
 
@@ -238,6 +251,7 @@ def main():
     args = ap.parse_args()
     if args.quiet:
         RUN_FLAGS.append("--quiet")
+    TIMINGS.append(os.path.join(args.out, "timings.tsv"))
     try:
         with open(args.spec, "rb") as fh:
             spec = tomllib.load(fh)

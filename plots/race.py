@@ -266,7 +266,7 @@ def status_text(run):
 def size_table(sc, s):
     goal, extra = sc.targets[s], [m for m in ("position_error", "newton_residual") if m in sc.metrics()]
     head = ["method", "form", "time to target s"] + [f"time to {METRIC_LABELS[m]} s" for m in extra] + \
-        ["wall s", "final rel. residual", "s / outer it.", "linear its", "status"]
+        ["wall s", "final rel. residual", "s / outer it.", "linear its", "status", "load"]
     lines = [f"### {s} ({sc.rows(s)} dual rows; target {xbruns.fmt(goal['relative_dual_residual'])}"
              + "".join(f", {METRIC_LABELS[m]} {xbruns.fmt(goal[m])}" for m in extra) + ")", "",
              "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -276,9 +276,13 @@ def size_table(sc, s):
         cells = [label(e), e["form"], fmt_time(rules.time_to(r, goal["relative_dual_residual"]))]
         cells += [fmt_time(rules.time_to(r, goal[m], m)) for m in extra]
         cells += [f"{float(a.get('wall_time', math.nan)):.2f}", xbruns.fmt(rules.final_value(r, "relative_dual_residual")),
-                  xbruns.fmt(rules.per_iteration(r)), xbruns.fmt(mean_linear_iterations(r)), status_text(r)]
+                  xbruns.fmt(rules.per_iteration(r)), xbruns.fmt(mean_linear_iterations(r)), status_text(r),
+                  xbruns.fmt(float(a.get("load_average", math.nan)))]
         lines.append("| " + " | ".join(cells) + " |")
     notes = [n for n in (lagged_note(e) for e in ranked) if n]
+    made = sorted(str(e["run"]["attrs"]["created"]) for e in ranked if "created" in e["run"]["attrs"])
+    if made:
+        notes.append(f"runs made {made[0]} – {made[-1]}; load: the 1-min load average at each run's start.")
     return lines + [""] + [f"- {n}" for n in notes] + ([""] if notes else [])
 
 
