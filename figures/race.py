@@ -152,17 +152,18 @@ def exact_of(r):
     return {"time": float(r["attrs"]["wall_time"]), "target": rules.target(r)}
 
 
-def choose_form(args, spec, scene_name, scene, size, name, exact):
-    """The form of method `name` for this scene (rules.choose_form): both forms at the smallest
-    size with fixed forcing. Returns the form and that form's run."""
+def choose_form(args, spec, scene_name, scene, size, name, exact, forms):
+    """The form of method `name` for this scene (rules.form_of): both forms at the smallest size
+    with fixed forcing, or for a variant its method's. Returns the form and that form's run."""
     runs = {}
     m = spec["methods"][name]
-    for form in ("dual", "primal"):
+    variant = rules.base_of(name, spec["methods"])
+    for form in ("dual", "primal") if not variant else (forms.get(variant, rules.FALLBACK_FORM),):
         sets = entry_sets(spec, scene, size, name, "fixed", exact)
         path = run_file(args.out, scene_name, size["label"], name, form, "fixed")
         runs[form] = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run,
                              scene.get("reference", False))
-    form = rules.choose_form(runs)
+    form = rules.form_of(name, spec["methods"], runs, forms)
     return form, runs.get(form)
 
 
@@ -190,7 +191,7 @@ def run_scene(args, spec, scene_name, scene):
     forms, exact = {}, None
     for name in order:
         if not methods[name].get("local"):
-            forms[name], r = choose_form(args, spec, scene_name, scene, sizes[0], name, exact)
+            forms[name], r = choose_form(args, spec, scene_name, scene, sizes[0], name, exact, forms)
             if name == "cholmod":
                 exact = exact_of(r)
     print(f"race: {scene_name} forms: " + ", ".join(f"{k} {v}" for k, v in forms.items()), flush=True)
@@ -224,6 +225,10 @@ def check_spec(bench, spec):
         if m.get("solver") not in names["solvers"]:
             bad.append(f"methods.{name}: unknown solver {m.get('solver')!r}")
         bad += [f"methods.{name}: unknown key {k!r}" for k in m.get("set", {}) if k not in names["keys"]]
+    for name, m in spec["methods"].items():
+        base = m.get("variant_of")
+        if base is not None and (base not in spec["methods"] or list(spec["methods"]).index(base) > list(spec["methods"]).index(name)):
+            bad.append(f"methods.{name}: variant_of {base!r} is not a method listed before it")
     for name, sc in spec["scenes"].items():
         if sc.get("scene") not in names["scenes"]:
             bad.append(f"scenes.{name}: unknown scene {sc.get('scene')!r}")

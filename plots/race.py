@@ -89,17 +89,19 @@ def ordered_sizes(sizes, scene_spec):
     return sorted(sizes, key=lambda s: (order.index(s) if s in order else len(order), rows[s]))
 
 
-def chosen_forms(smallest_entries):
-    """Each method's form by rules.choose_form from its fixed-forcing runs at the smallest size."""
+def chosen_forms(smallest_entries, methods):
+    """Each method's form by rules.form_of from its fixed-forcing runs at the smallest size, in the
+    spec's order (a variant after its method)."""
     by_method = {}
     for e in smallest_entries:
         if e["form"] == "none":
-            by_method.setdefault(e["method"], None)
-        elif e["forcing"] == "fixed":
-            by_method.setdefault(e["method"], {})
-            if by_method[e["method"]] is not None:
-                by_method[e["method"]][e["form"]] = e["run"]
-    return {m: ("none" if runs is None else rules.choose_form(runs)) for m, runs in by_method.items()}
+            by_method[e["method"]] = None
+        elif e["forcing"] == "fixed" and by_method.get(e["method"], {}) is not None:
+            by_method.setdefault(e["method"], {})[e["form"]] = e["run"]
+    forms = {}
+    for m in sorted(by_method, key=lambda m: (list(methods).index(m) if m in methods else len(methods), m)):
+        forms[m] = "none" if by_method[m] is None else rules.form_of(m, methods, by_method[m], forms)
+    return forms
 
 
 def label(e):
@@ -115,11 +117,11 @@ class Scene:
 
     def __init__(self, name, sizes, spec):
         methods = spec.get("methods", {})
-        self.name = name
+        self.name, self.methods = name, methods
         self.family = lambda m: methods.get(m, {}).get("variant_of", m)
         self.order = ordered_sizes(sizes, spec.get("scenes", {}).get(name))
         self.raw_smallest = sizes[self.order[0]]
-        self.forms = chosen_forms(self.raw_smallest)
+        self.forms = chosen_forms(self.raw_smallest, methods)
         self.sizes, self.dropped = {}, []
         for s in self.order:
             keep = [e for e in sizes[s] if self.forms.get(e["method"], e["form"]) == e["form"]]
@@ -174,7 +176,7 @@ def draw_scene(plt, sc, out):
     """One line per method at its best; a row per metric the runs record."""
     metrics, colours = sc.metrics() or ["relative_dual_residual"], colour_of(sc.families)
     fig, axes = plt.subplots(len(metrics), len(sc.order), figsize=(5.4 * len(sc.order), 4.2 * len(metrics)),
-                             squeeze=False)
+                             squeeze=False, constrained_layout=True)
     for j, s in enumerate(sc.order):
         best = list(sc.best_by_family(s).values())
         for i, metric in enumerate(metrics):
@@ -190,9 +192,10 @@ def draw_variants(plt, sc, out):
     fams = [f for f in sc.families if sum(sc.family(e["method"]) == f for e in sc.sizes[sc.order[0]]) > 1]
     if not fams:
         return
-    fig, axes = plt.subplots(len(fams), len(sc.order), figsize=(5.4 * len(sc.order), 4.0 * len(fams)), squeeze=False)
+    fig, axes = plt.subplots(len(fams), len(sc.order), figsize=(5.4 * len(sc.order), 4.0 * len(fams)), squeeze=False, constrained_layout=True)
     for i, fam in enumerate(fams):
-        names = list(dict.fromkeys(e["method"] for es in sc.sizes.values() for e in es if sc.family(e["method"]) == fam))
+        present = {e["method"] for es in sc.sizes.values() for e in es if sc.family(e["method"]) == fam}
+        names = [m for m in sc.methods if m in present] + sorted(present - set(sc.methods))
         colours = colour_of(names)
         for j, s in enumerate(sc.order):
             es = [e for e in sc.sizes[s] if sc.family(e["method"]) == fam]
@@ -206,12 +209,12 @@ def draw_variants(plt, sc, out):
 
 
 def draw_crossover(plt, scenes, out):
-    fig, axes = plt.subplots(1, len(scenes), figsize=(5.4 * len(scenes), 4.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(scenes), figsize=(5.4 * len(scenes), 4.2), squeeze=False, constrained_layout=True)
     for ax, sc in zip(axes[0], scenes):
         colours, lines = colour_of(sc.families), {}
         for s in sc.order:
             for fam, e in sc.best_by_family(s).items():
-                if rules.finished(e["run"]):
+                if rules.status(e["run"]) in rules.PACED:  # a timeout measured its pace too
                     lines.setdefault(fam, []).append((sc.rows(s), rules.per_iteration(e["run"])))
         for fam, pts in lines.items():
             ax.loglog([p[0] for p in pts], [p[1] for p in pts], "-o", ms=4, color=colours[fam], label=fam)
@@ -299,10 +302,13 @@ def summary(scenes):
         for m, f in sc.forms.items():
             if f == "none":
                 continue
-            t = {e["form"]: rules.per_iteration(e["run"]) for e in chosen_candidates(sc, m)}
-            forms.append(f"{m} {f} (" + ", ".join(f"{k} {xbruns.fmt(v)}" for k, v in sorted(t.items())) + ")")
-        lines += [f"## {sc.name}", "", f"forms (s per outer iteration at {smallest}, fixed forcing; a form that did "
-                  "not finish counts as nan): " + "; ".join(forms), ""]
+            base = rules.base_of(m, sc.methods)
+            t = {e["form"]: f"{xbruns.fmt(rules.per_iteration(e['run']))} {rules.status(e['run'])}"
+                 for e in chosen_candidates(sc, m)}
+            forms.append(f"{m} {f} (" + (f"as {base}" if base else ", ".join(f"{k} {v}" for k, v in sorted(t.items())))
+                         + ")")
+        lines += [f"## {sc.name}", "", f"forms (s per outer iteration at {smallest} with fixed forcing, and the run's "
+                  "status; a run that broke down or diverged does not count): " + "; ".join(forms), ""]
         for s in sc.order:
             lines += size_table(sc, s)
         if sc.dropped:

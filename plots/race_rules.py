@@ -4,9 +4,10 @@ summarises by them, so the two cannot disagree about a run's form, target or ver
 - A run *finished* if its status is ok or max_iterations and it took an outer iteration; any
   other status (breakdown, diverged, timeout, ...) or a process that left no run (a failure
   record, `failed`) did not.
-- A method's form (`choose_form`): of its fixed-forcing runs in both forms at the smallest size of
-  a scene, the finished one with the lower wall time per outer iteration; `primal` if neither
-  finished (the others' form on the squash, and the form of every method that has only one).
+- A method's form (`form_of`): of its fixed-forcing runs in both forms at the smallest size of a
+  scene, the one with the lower wall time per outer iteration among those that finished or ran
+  out of time (a timeout measured its pace too; a breakdown or divergence did not); `primal` if
+  neither did. A variant (`variant_of` in the spec) takes its method's form and runs only that.
 - The target of a size (`target`): the value exact CHOLMOD's finished run ends the frame at, for
   each metric it records; no target where exact CHOLMOD did not finish.
 - A run's time to a target: the wall time within the frame at which the metric first comes within
@@ -19,6 +20,7 @@ import math
 import numpy as np
 
 FINISHED = ("ok", "max_iterations")
+PACED = FINISHED + ("timeout",)  # statuses whose time per outer iteration chooses a form
 FALLBACK_FORM = "primal"
 TARGET_SLACK = 1.05  # "reaches" exact CHOLMOD's end-of-frame value: within 5 %
 # Metrics of a run against wall time, each relative to its first value where the dataset is not
@@ -48,8 +50,22 @@ def per_iteration(run):
 
 def choose_form(runs_by_form):
     """{form: run or None} of one method's fixed-forcing runs at the smallest size -> its form."""
-    timing = {f: per_iteration(r) for f, r in runs_by_form.items() if finished(r)}
+    timing = {f: per_iteration(r) for f, r in runs_by_form.items()
+              if r is not None and status(r) in PACED and math.isfinite(per_iteration(r))}
     return min(timing, key=timing.get) if timing else FALLBACK_FORM
+
+
+def base_of(name, methods):
+    """The method a variant belongs to (its spec's variant_of), or None."""
+    return (methods or {}).get(name, {}).get("variant_of")
+
+
+def form_of(name, methods, runs_by_form, forms):
+    """Method `name`'s form: its base method's (in `forms`) for a variant, else choose_form."""
+    base = base_of(name, methods)
+    if base:
+        return forms.get(base, FALLBACK_FORM)
+    return choose_form(runs_by_form)
 
 
 def series(run, metric):

@@ -33,6 +33,8 @@ def test_form_is_the_finished_one_faster_per_outer_iteration():
     # A faster run that broke down does not win (the plot used to ignore the status).
     assert rules.choose_form({"dual": fake("breakdown", wall=0.1), "primal": fake(wall=2.0)}) == "primal"
     assert rules.choose_form({"dual": fake("max_iterations", wall=1.0), "primal": fake(wall=2.0)}) == "dual"
+    # A run out of time measured its pace (a breakdown or a divergence did not).
+    assert rules.choose_form({"dual": fake("timeout", wall=1.0), "primal": fake(wall=2.0)}) == "dual"
     # Neither finished: primal (the driver's fallback, and now the plot's).
     assert rules.choose_form({"dual": fake("diverged"), "primal": failed()}) == "primal"
     assert rules.choose_form({"dual": None, "primal": None}) == "primal"
@@ -78,6 +80,11 @@ def scene():
 def test_summary_keeps_every_size_failed_runs_and_says_what_it_left_out():
     sc = scene()
     assert sc.forms["mgpbd"] == "primal" and sc.forms["cholmod"] == "primal"
+    assert sc.forms["mgpbd-double"] == "primal"  # a variant takes its method's form
+    dual_mgpbd = race.Scene("squash", {"s": [entry("mgpbd", "dual", "fixed", fake(wall=0.5)),
+                                             entry("mgpbd", "primal", "fixed", fake(wall=1.0)),
+                                             entry("mgpbd-double", "primal", "fixed", fake(wall=0.1))]}, SPEC)
+    assert dual_mgpbd.forms == {"mgpbd": "dual", "mgpbd-double": "dual"}
     text = race.summary([sc])
     medium = text[text.index("### m"):]
     assert "| mgpbd | primal |" in medium  # the larger size is kept in the chosen form
