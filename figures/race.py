@@ -121,11 +121,13 @@ def run_one(bench, path, scene, solver, form, sets, budget, dry_run, reference=F
     return runs[-1] if runs else None
 
 
-def budget(spec, exact):
-    """A run's time budget: the spec's, and at most budget_factor × exact CHOLMOD's frame."""
+def budget(spec, exact, scene):
+    """A run's time budget: the spec's, and at most budget_factor (the scene's, else the spec's) ×
+    exact CHOLMOD's frame."""
     if exact is None:
         return spec["time_budget"]
-    return min(spec["time_budget"], max(10.0, spec.get("budget_factor", 4) * exact["time"]))
+    factor = scene.get("budget_factor", spec.get("budget_factor", 4))
+    return min(spec["time_budget"], max(10.0, factor * exact["time"]))
 
 
 def entry_sets(spec, scene, size, name, forcing, exact):
@@ -161,7 +163,7 @@ def choose_form(args, spec, scene_name, scene, size, name, exact, forms):
     for form in ("dual", "primal") if not variant else (forms.get(variant, rules.FALLBACK_FORM),):
         sets = entry_sets(spec, scene, size, name, "fixed", exact)
         path = run_file(args.out, scene_name, size["label"], name, form, "fixed")
-        runs[form] = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run,
+        runs[form] = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact, scene), args.dry_run,
                              scene.get("reference", False))
     form = rules.form_of(name, spec["methods"], runs, forms)
     return form, runs.get(form)
@@ -204,7 +206,7 @@ def run_scene(args, spec, scene_name, scene):
             for forcing in rules_:
                 sets = entry_sets(spec, scene, size, name, None if forcing == "none" else forcing, exact)
                 path = run_file(args.out, scene_name, size["label"], name, form, forcing)
-                r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact), args.dry_run,
+                r = run_one(args.bench, path, scene["scene"], m["solver"], form, sets, budget(spec, exact, scene), args.dry_run,
                             scene.get("reference", False))
                 if name == "cholmod":
                     exact = exact_of(r)
