@@ -296,6 +296,7 @@ def summary(scenes):
              f"relative dual residual first comes within {slack} % of what exact CHOLMOD reaches at the end of the "
              "frame (— never; no target where exact CHOLMOD did not finish). EW: linear.forcing = eisenstat_walker. "
              "Rules: plots/race_rules.py.", ""]
+    lines += headline(scenes)
     for sc in scenes:
         smallest = sc.order[0]
         forms = []
@@ -314,6 +315,31 @@ def summary(scenes):
         if sc.dropped:
             lines += ["Runs in a form other than the chosen one (not in the tables): " + ", ".join(sc.dropped), ""]
     return "\n".join(lines) + "\n"
+
+
+def headline(scenes):
+    """Each method at its best: per scene and size, the best entry's time to the target (s)."""
+    fams = list(dict.fromkeys(f for sc in scenes for f in sc.families))
+    lines = ["## Each method at its best", "",
+             "Time to the target (s) of each method's best entry (its forcing rule and variant in brackets; "
+             "— never, with its status); the target: exact CHOLMOD's relative dual residual at the end of the frame.", "",
+             "| scene, size (dual rows) | target | " + " | ".join(fams) + " |", "|---|---|" + "---|" * len(fams)]
+    for sc in scenes:
+        for s in sc.order:
+            best, cells = sc.best_by_family(s), []
+            for f in fams:
+                e = best.get(f)
+                if e is None:
+                    cells.append("")
+                    continue
+                tt = rules.time_to(e["run"], sc.targets[s]["relative_dual_residual"])
+                tag = ", ".join(x for x in (e["method"] if e["method"] != f else "",
+                                            "EW" if e["forcing"] == "eisenstat_walker" else "") if x)
+                cells.append((f"{tt:.2f}" if math.isfinite(tt) else f"— ({rules.status(e['run'])})")
+                             + (f" ({tag})" if tag else ""))
+            lines.append(f"| {sc.name} {s} ({sc.rows(s)}) | {xbruns.fmt(sc.targets[s]['relative_dual_residual'])} | "
+                         + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def chosen_candidates(sc, method):
