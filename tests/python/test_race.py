@@ -92,6 +92,8 @@ def test_summary_keeps_every_size_failed_runs_and_says_what_it_left_out():
     assert "target nan" in medium  # exact CHOLMOD broke down there: no target
     assert "mgpbd [dual] at m" in text  # a run in the other form is named, not dropped silently
     assert "hit the bound of 30 CG iterations" in text and "18" in text and "wasted CG iterations" in text
+    head = text[text.index("## Each method at its best"):text.index("## squash")]
+    assert "| squash s (100) | 0.1 | 1.00 |" in head and "| squash m (400) | nan | — (breakdown) |" in head
     # One line per method in the main panels: mgpbd-double is mgpbd's variant.
     assert set(sc.best_by_family("s")) == {"cholmod", "mgpbd", "cholmod-lagged"}
 
