@@ -11,8 +11,9 @@ whose process wrote none leaves a .failed.json record (its exit code and last wo
 file or record that exists is a finished entry and is not run again (--fresh starts over).
 --quick (`make race`): each scene's `quick_size` of the spec only; without it (`make race-full`)
 every size. The rules (each method's form, the target, what finished) are plots/race_rules.py's:
-both forms run at the smallest size with linear.forcing = fixed and the finished one faster per
-outer iteration wins (primal if neither finished). Exact CHOLMOD runs first at each size; every
+both forms run at the smallest size with linear.forcing = fixed and the one faster per outer
+iteration wins (of those that finished or ran out of time; primal if neither did; a variant takes
+its method's form). Exact CHOLMOD runs first at each size; every
 other entry then races to the relative dual residual it ended the frame at (rtol = that residual,
 at most `overrun` times the frame's outer iterations, at most `budget_factor` times its wall
 time). Then plots/race.py draws the figures and writes OUT/summary.md. On a terminal each run
