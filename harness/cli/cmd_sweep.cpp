@@ -206,7 +206,8 @@ int cmd_sweep(const CommandArgs& argv) {
       if (timed > 0) line.set_remaining(spent / timed * (total - done));  // the sweep's ETA: runs left × mean
       rec = runner.run(job, ++index, res, [&line](const IterationProgress& s) { line.set_iteration(s); });
     }
-    append_runs(out, {rec}, existing == 0 && index == 1);
+    append_command_run("sweep", out, rec, existing == 0 && index == 1, index - 1,
+                       ": run the same sweep again to resume from there");
     finished[job.key] = rec.name;
     ++done;
     spent += clock.seconds();
