@@ -115,13 +115,18 @@ void TmpFile::write_text(const std::function<void(std::FILE*)>& body) {
   if (!ok) fail("write " + path_, EIO);
 }
 
-void TmpFile::commit() {
+void TmpFile::finish() {
+  if (fd_ < 0) return;
   if (!pending_.empty()) put(pending_.data(), pending_.size());
   pending_.clear();
   if (const int e = io_fault::next_write()) fail("flush " + path_ + " to disk", e);
   if (::fsync(fd_) != 0) fail("flush " + path_ + " to disk", errno);
   const int fd = std::exchange(fd_, -1);
   if (::close(fd) != 0) fail("close " + path_, errno);
+}
+
+void TmpFile::commit() {
+  finish();
   int e = io_fault::next_rename();
   if (e == 0 && ::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
   if (e) fail("rename " + tmp_ + " to " + path_, e);

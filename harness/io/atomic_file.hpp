@@ -47,8 +47,10 @@ class TmpFile {
   void write(const void* data, std::size_t n);
   // Appends what `body` prints to a stdio stream over this file. Throws WriteError.
   void write_text(const std::function<void(std::FILE*)>& body);
-  // Writes what is pending, flushes PATH.tmp to disk, closes it, renames it over PATH and flushes
-  // the folder. Throws WriteError (PATH.tmp is then removed, PATH left as it was).
+  // Writes what is pending, flushes PATH.tmp to disk and closes it (no more writes). Throws WriteError.
+  void finish();
+  // finish(), then renames PATH.tmp over PATH and flushes the folder. Throws WriteError (PATH.tmp
+  // is then removed, PATH left as it was).
   void commit();
 
  private:

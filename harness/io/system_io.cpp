@@ -220,6 +220,7 @@ std::vector<std::string> write_captured_system(const std::string& prefix, const 
       write_matrix_market(next("_f.mtx"), f);
     }
     write_system_h5(next(".h5"), sys);
+    for (auto& f : files) f->finish();  // every byte on disk before the first rename
   } catch (const WriteError& e) {
     throw WriteError(e.path, e.err, std::string(e.what()) + "; no file of " + prefix + " was replaced");
   }
