@@ -97,7 +97,8 @@ def command_cases(binary, work):
         shutil.copy(earlier, probe)  # a sweep appends to it; run and solve replace it
         # The file as the first write makes it: for the sweep, stop before its second write.
         rc, err = xb(binary, args + ["--out", probe], {"XB_FAULT_RENAME": "2:EIO"} if name == "sweep" else None)
-        assert rc == (2 if name == "sweep" else 0), err
+        if rc != (2 if name == "sweep" else 0):
+            fail(f"{name} probe", f"exit {rc} (is XB_FAULT_RENAME honoured?): {err}")
         for fault, env, words in faults(os.path.getsize(probe)):
             case = f"{name} at the {fault}"
             cases.append((case, lambda c=case, a=args, e=env, w=words: one_case(binary, work, c, a, earlier, e, w)))
