@@ -22,6 +22,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import xbruns  # noqa: E402
+
 GROUPS = [
     ("iterations", "linear-solver iterations to tolerance", lambda kind: kind == "iterations"),
     ("outer_iterations", "outer iterations per substep", lambda kind: kind == "outer_iterations"),
@@ -104,8 +107,7 @@ def main(argv=None):
         fig.suptitle(f"{title} over {len(runs)} runs (dashed: baseline)", fontsize=10)
         fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))
         path = f"{a.out}_{key}.png"
-        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        fig.savefig(path, dpi=90)
+        xbruns.write_figure(fig, path, dpi=90)
         plt.close(fig)
         print(f"perf_history: wrote {path} ({len(metrics)} metrics)")
         wrote += 1

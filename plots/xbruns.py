@@ -174,14 +174,37 @@ def default_out(results, suffix):
 
 
 def save(fig, out):
-    """Writes OUT as PNG and the same figure as PDF beside it."""
-    d = os.path.dirname(out)
-    if d:
-        os.makedirs(d, exist_ok=True)
+    """Writes OUT as PNG and the same figure as PDF beside it (write_figure: whole or not at all)."""
     root = os.path.splitext(out)[0]
-    fig.savefig(root + ".png", dpi=150, bbox_inches="tight")
-    fig.savefig(root + ".pdf", bbox_inches="tight")
+    write_figure(fig, root + ".png", dpi=150, bbox_inches="tight")
+    write_figure(fig, root + ".pdf", bbox_inches="tight")
     print(f"wrote {root}.png and {root}.pdf")
+
+
+def write_figure(fig, path, **savefig_args):
+    """fig.savefig to PATH through PATH.tmp, flushed to disk and renamed over PATH, as the harness
+    writes its files (docs/failures.md). A failed write (a full disk) ends the script with one
+    line naming the file and the cause and exit code 2; PATH is left as it was, no .tmp stays."""
+    tmp = path + ".tmp"
+    try:
+        d = os.path.dirname(path)
+        if d:
+            os.makedirs(d, exist_ok=True)
+        with open(tmp, "wb") as fh:
+            fig.savefig(fh, format=os.path.splitext(path)[1][1:] or "png", **savefig_args)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except OSError as e:
+        try:
+            os.remove(tmp)
+        except OSError:
+            pass
+        cause = os.strerror(e.errno) if e.errno else str(e)
+        cause = cause[:1].lower() + cause[1:] if cause[1:2].islower() else cause
+        print(f"{os.path.basename(sys.argv[0]) or 'plots'}: cannot write {path}: {cause} ({path} is left as it was)",
+              file=sys.stderr)
+        sys.exit(2)
 
 
 def linear_fit(x, y):

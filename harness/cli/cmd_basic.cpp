@@ -118,7 +118,7 @@ int cmd_run(const CommandArgs& argv) {
     line.stop();
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
     ++index;
-    append_runs(out, {make_simulation_record(run_name(index, p.scene, tag), q, method, res)}, index == 1);
+    append_command_run("run", out, make_simulation_record(run_name(index, p.scene, tag), q, method, res), index == 1, index - 1);
   }
   print_report(out, "table");
   return 0;

@@ -138,7 +138,13 @@ int cmd_capture(const CommandArgs& argv) {
   meta.attrs["asymmetry"] = asymmetry(sys.A);
   sys.attrs = meta.attrs;
   std::string files;
-  for (const auto& f : write_captured_system(prefix, sys)) files += (files.empty() ? "" : ", ") + f;
+  std::vector<std::string> written;
+  try {
+    written = write_captured_system(prefix, sys);
+  } catch (const WriteError& e) {
+    throw WriteError(e.path, e.err, std::string("capture: ") + e.what());
+  }
+  for (const auto& f : written) files += (files.empty() ? "" : ", ") + f;
   std::cout << "capture: wrote " << files << " (" << sys.A.rows() << " rows, " << sys.A.nonZeros() << " non-zeros)\n";
   return 0;
 }
@@ -330,7 +336,7 @@ int cmd_solve(const CommandArgs& argv) {
       outcome = solve_one(sys, runs[i].method, q, form);
     }
     record_outcome(r, std::move(outcome), ref, sys.A, sys.b);
-    append_runs(out, {r}, i == 0);
+    append_command_run("solve", out, r, i == 0, static_cast<int>(i));
   }
   print_report(out, "table");
   return 0;

@@ -206,15 +206,16 @@ int cmd_sweep(const CommandArgs& argv) {
       if (timed > 0) line.set_remaining(spent / timed * (total - done));  // the sweep's ETA: runs left × mean
       rec = runner.run(job, ++index, res, [&line](const IterationProgress& s) { line.set_iteration(s); });
     }
-    append_runs(out, {rec}, existing == 0 && index == 1);
+    std::ostringstream os;
+    os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
+       << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
+    std::cerr << os.str() << "\n";  // before the write, so that a failed one is a line of its own
+    append_command_run("sweep", out, rec, existing == 0 && index == 1, index - 1,
+                       ": run the same sweep again to resume from there");
     finished[job.key] = rec.name;
     ++done;
     spent += clock.seconds();
     ++timed;
-    std::ostringstream os;
-    os << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
-       << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)";
-    std::cerr << os.str() << "\n";
   }
   print_summary(spec, jobs, out);
   // The sweep did what it was asked (its runs are in the file), so it succeeds: exit code 1 here

@@ -1,6 +1,8 @@
 #include "outputs.hpp"
 
+#include "../io/atomic_file.hpp"
 #include "../io/h5io.hpp"
+#include "../io/recorder.hpp"
 
 #include "../../core/error.hpp"
 #include "../../problems/meshes/real_meshes.hpp"
@@ -76,11 +78,8 @@ bool is_results_file(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return false;
   h5::silence_errors();
-  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) return false;
-  const bool runs = H5Lexists(f, "/runs", H5P_DEFAULT) > 0;
-  H5Fclose(f);
-  return runs;
+  const h5::H f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  return f >= 0 && H5Lexists(f, "/runs", H5P_DEFAULT) > 0;
 }
 
 void check_replaceable(const std::string& command, const std::string& out) {
@@ -88,6 +87,17 @@ void check_replaceable(const std::string& command, const std::string& out) {
   if (fs::exists(out, ec) && !is_results_file(out))
     throw Error(command + ": --out " + out + " exists and is not an xpbd-bench results file (it would be replaced); "
                 "remove it or write elsewhere");
+}
+
+void append_command_run(const std::string& command, const std::string& out, const RunRecord& run, bool fresh,
+                        int kept, const std::string& hint) {
+  try {
+    append_runs(out, {run}, fresh);
+  } catch (const WriteError& e) {
+    std::string line = command + ": " + e.what();
+    if (kept > 0) line += "; it holds the " + std::to_string(kept) + (kept == 1 ? " run" : " runs") + " finished before";
+    throw WriteError(e.path, e.err, line + hint);
+  }
 }
 
 }  // namespace xb

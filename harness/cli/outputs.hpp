@@ -3,6 +3,7 @@
 #pragma once
 
 #include "../params.hpp"
+#include "../io/record.hpp"
 
 #include <string>
 #include <vector>
@@ -25,5 +26,11 @@ void check_output_dir(const std::string& command, const std::string& flag, const
 bool is_results_file(const std::string& path);
 // run and solve replace --out: refused unless it is absent or a results file.
 void check_replaceable(const std::string& command, const std::string& out);
+
+// append_runs for a command: a failed write (a full disk) is rethrown as one line that starts
+// with the command and says how many runs the file still holds (`kept`: its runs before this
+// write), then `hint` (what to do next) if given. The file itself is left as it was.
+void append_command_run(const std::string& command, const std::string& out, const RunRecord& run, bool fresh,
+                        int kept, const std::string& hint = "");
 
 }  // namespace xb

@@ -1,45 +1,137 @@
 #include "atomic_file.hpp"
 
-#include "../../core/error.hpp"
+#include "io_fault.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <exception>
 #include <filesystem>
+#include <system_error>
+#include <utility>
 
 namespace fs = std::filesystem;
 
 namespace xb {
 
 namespace {
-void fsync_path(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY);
+void fsync_folder(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY);
   if (fd >= 0) {
-    ::fsync(fd);
+    ::fsync(fd);  // the rename is done: a failure here loses only durability, not the file
     ::close(fd);
   }
 }
 }  // namespace
 
+std::string errno_text(int err) {
+  std::string s = std::generic_category().message(err);
+  if (s.size() > 1 && std::isupper(static_cast<unsigned char>(s[0])) && std::islower(static_cast<unsigned char>(s[1])))
+    s[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(s[0])));
+  return s;
+}
+
 TmpFile::TmpFile(std::string path) : path_(std::move(path)), tmp_(path_ + ".tmp") {
-  std::error_code ec;
-  fs::remove(tmp_, ec);
+  ::unlink(tmp_.c_str());  // a stale one from a killed run
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0) throw WriteError(path_, errno, "cannot create " + tmp_ + ": " + errno_text(errno) + " (" + path_ + " is left as it was)");
 }
 
 TmpFile::~TmpFile() {
   if (committed_) return;
-  std::error_code ec;
-  fs::remove(tmp_, ec);
+  if (fd_ >= 0) ::close(fd_);
+  ::unlink(tmp_.c_str());
+}
+
+void TmpFile::fail(const std::string& verb, int err) {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  ::unlink(tmp_.c_str());
+  throw WriteError(path_, err, "cannot " + verb + ": " + errno_text(err) + " (" + path_ + " is left as it was)");
+}
+
+void TmpFile::put(const char* data, std::size_t n) {
+  if (const int e = io_fault::next_write()) fail("write " + path_, e);
+  while (n > 0) {
+    const ssize_t k = ::write(fd_, data, n);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) fail("write " + path_, errno);
+    if (k == 0) fail("write " + path_, ENOSPC);  // no progress on a regular file: the device is full
+    data += k;
+    n -= static_cast<std::size_t>(k);
+  }
+}
+
+void TmpFile::write(const void* data, std::size_t n) {
+  const char* p = static_cast<const char*>(data);
+  if (!pending_.empty()) {
+    const std::size_t k = std::min(n, write_chunk - pending_.size());
+    pending_.append(p, k);
+    p += k;
+    n -= k;
+    if (pending_.size() < write_chunk) return;
+    put(pending_.data(), pending_.size());
+    pending_.clear();
+  }
+  for (; n >= write_chunk; p += write_chunk, n -= write_chunk) put(p, write_chunk);
+  pending_.assign(p, n);
+}
+
+void TmpFile::write_text(const std::function<void(std::FILE*)>& body) {
+  // A stdio stream whose writes land in this file; an exception must not cross stdio's C
+  // frames, so the first one is kept and thrown once the body is done.
+  struct Cookie {
+    TmpFile* file;
+    std::exception_ptr error;
+  } cookie{this, nullptr};
+  cookie_io_functions_t io{};
+  io.write = [](void* c, const char* buf, size_t n) -> ssize_t {
+    auto* k = static_cast<Cookie*>(c);
+    if (k->error) return 0;
+    try {
+      k->file->write(buf, n);
+      return static_cast<ssize_t>(n);
+    } catch (...) {
+      k->error = std::current_exception();
+      return 0;
+    }
+  };
+  std::FILE* f = ::fopencookie(&cookie, "w", io);
+  if (!f) fail("write " + path_, errno);
+  try {
+    body(f);
+  } catch (...) {
+    std::fclose(f);
+    throw;
+  }
+  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
+  std::fclose(f);
+  if (cookie.error) std::rethrow_exception(cookie.error);
+  if (!ok) fail("write " + path_, EIO);
+}
+
+void TmpFile::finish() {
+  if (fd_ < 0) return;
+  if (!pending_.empty()) put(pending_.data(), pending_.size());
+  pending_.clear();
+  if (const int e = io_fault::next_write()) fail("flush " + path_ + " to disk", e);
+  if (::fsync(fd_) != 0) fail("flush " + path_ + " to disk", errno);
+  const int fd = std::exchange(fd_, -1);
+  if (::close(fd) != 0) fail("close " + path_, errno);
 }
 
 void TmpFile::commit() {
-  fsync_path(tmp_);
-  std::error_code ec;
-  fs::rename(tmp_, path_, ec);
-  if (ec) throw Error("cannot rename " + tmp_ + " to " + path_ + ": " + ec.message());
+  finish();
+  int e = io_fault::next_rename();
+  if (e == 0 && ::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
+  if (e) fail("rename " + tmp_ + " to " + path_, e);
   committed_ = true;
-  const fs::path parent = fs::path(path_).parent_path();
-  fsync_path(parent.empty() ? "." : parent.string());
+  fsync_folder(path_);
 }
 
 void make_parent(const std::string& path) {
@@ -51,17 +143,35 @@ void make_parent(const std::string& path) {
 void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body) {
   make_parent(path);
   TmpFile tmp(path);
-  std::FILE* f = std::fopen(tmp.path().c_str(), "w");
-  if (!f) throw Error("cannot create " + tmp.path());
-  try {
-    body(f);
-  } catch (...) {
-    std::fclose(f);
-    throw;
-  }
-  const bool ok = std::fflush(f) == 0 && !std::ferror(f);
-  if (std::fclose(f) != 0 || !ok) throw Error("cannot write " + tmp.path());
+  tmp.write_text(body);
   tmp.commit();
+}
+
+void write_file_atomically(const std::string& path, const void* data, std::size_t n) {
+  make_parent(path);
+  TmpFile tmp(path);
+  tmp.write(data, n);
+  tmp.commit();
+}
+
+std::vector<char> read_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error("cannot read " + path + ": " + errno_text(errno));
+  std::vector<char> bytes;
+  char buf[65536];
+  for (;;) {
+    const ssize_t k = ::read(fd, buf, sizeof buf);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) {
+      const int e = errno;
+      ::close(fd);
+      throw Error("cannot read " + path + ": " + errno_text(e));
+    }
+    if (k == 0) break;
+    bytes.insert(bytes.end(), buf, buf + k);
+  }
+  ::close(fd);
+  return bytes;
 }
 
 }  // namespace xb

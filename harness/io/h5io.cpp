@@ -17,15 +17,17 @@ void check_id(hid_t id, const std::string& what) {
   if (id < 0) throw Error("HDF5: " + what + " failed");
 }
 
-hid_t string_type() {
-  hid_t t = H5Tcopy(H5T_C_S1);
-  H5Tset_size(t, H5T_VARIABLE);
-  H5Tset_cset(t, H5T_CSET_UTF8);
+H string_type() {
+  H t(H5Tcopy(H5T_C_S1), H5Tclose);
+  check_id(t, "string type");
+  check(H5Tset_size(t, H5T_VARIABLE), "string type");
+  check(H5Tset_cset(t, H5T_CSET_UTF8), "string type");
   return t;
 }
 
 void write_attr(hid_t obj, const std::string& name, const AttrValue& v) {
   H space(H5Screate(H5S_SCALAR), H5Sclose);
+  check_id(space, "dataspace of attribute " + name);
   if (auto* i = std::get_if<long long>(&v)) {
     H a(H5Acreate2(obj, name.c_str(), H5T_NATIVE_LLONG, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
     check_id(a, "attribute " + name);
@@ -35,7 +37,7 @@ void write_attr(hid_t obj, const std::string& name, const AttrValue& v) {
     check_id(a, "attribute " + name);
     check(H5Awrite(a, H5T_NATIVE_DOUBLE, d), "write attribute " + name);
   } else {
-    H t(string_type(), H5Tclose);
+    H t = string_type();
     H a(H5Acreate2(obj, name.c_str(), t, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
     check_id(a, "attribute " + name);
     const char* s = std::get<std::string>(v).c_str();
@@ -44,10 +46,10 @@ void write_attr(hid_t obj, const std::string& name, const AttrValue& v) {
 }
 
 void write_dataset(hid_t group, const std::string& name, const DataValue& v) {
-  H lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
-  H5Pset_create_intermediate_group(lcpl, 1);
+  H lcpl = link_create_plist();
   hsize_t n = std::visit([](const auto& x) { return static_cast<hsize_t>(x.size()); }, v);
   H space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  check_id(space, "dataspace of " + name);
   if (auto* d = std::get_if<std::vector<double>>(&v)) {
     H ds(H5Dcreate2(group, name.c_str(), H5T_NATIVE_DOUBLE, space, lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
     check_id(ds, "dataset " + name);
@@ -60,7 +62,7 @@ void write_dataset(hid_t group, const std::string& name, const DataValue& v) {
     const auto& s = std::get<std::vector<std::string>>(v);
     std::vector<const char*> ptrs;
     for (const auto& x : s) ptrs.push_back(x.c_str());
-    H t(string_type(), H5Tclose);
+    H t = string_type();
     H ds(H5Dcreate2(group, name.c_str(), t, space, lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
     check_id(ds, "dataset " + name);
     if (n) check(H5Dwrite(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()), "write " + name);
@@ -221,18 +223,19 @@ const char* kind_text(Kind k) {
 }
 
 namespace {
-hid_t open_kind(hid_t loc, const std::string& name, const std::string& where, Kind want) {
+H open_kind(hid_t loc, const std::string& name, const std::string& where, Kind want) {
   const Kind k = link_kind(loc, name);
   const char* what = want == Kind::group ? "a group" : "a dataset";
   if (k != want) throw Error(where + ": " + name + " is " + kind_text(k) + ", expected " + what);
-  const hid_t id = want == Kind::group ? H5Gopen2(loc, name.c_str(), H5P_DEFAULT) : H5Dopen2(loc, name.c_str(), H5P_DEFAULT);
+  H id = want == Kind::group ? H(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose)
+                             : H(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
   if (id < 0) throw Error(where + ": cannot open " + name);
   return id;
 }
 }  // namespace
 
-hid_t open_group(hid_t loc, const std::string& name, const std::string& where) { return open_kind(loc, name, where, Kind::group); }
-hid_t open_dataset(hid_t loc, const std::string& name, const std::string& where) { return open_kind(loc, name, where, Kind::dataset); }
+H open_group(hid_t loc, const std::string& name, const std::string& where) { return open_kind(loc, name, where, Kind::group); }
+H open_dataset(hid_t loc, const std::string& name, const std::string& where) { return open_kind(loc, name, where, Kind::dataset); }
 
 std::vector<std::string> link_names(hid_t group, const std::string& where) {
   H5G_info_t info;
@@ -249,14 +252,69 @@ std::vector<std::string> link_names(hid_t group, const std::string& where) {
   return names;
 }
 
-hid_t open_file(const std::string& path) {
+namespace {
+// Closing the file closes every object still open in it (HDF5's default for its own driver is
+// to keep the file open until they are): nothing outlives an H5Fclose.
+H file_access() {
+  H fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  check_id(fapl, "file access properties");
+  check(H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG), "file access properties");
+  return fapl;
+}
+
+// The name of every file in memory: one that cannot exist on disk (the core driver refuses to
+// open an image under the name of an existing file; nothing is ever written under it).
+constexpr const char* memory_name = "/dev/null/xpbd-bench-in-memory";
+
+// The core driver without a backing store: the file lives in memory only.
+H memory_access() {
+  H fapl = file_access();
+  check(H5Pset_fapl_core(fapl, size_t{1} << 20, false), "in-memory file driver");
+  return fapl;
+}
+}  // namespace
+
+H link_create_plist() {
+  H lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  check_id(lcpl, "link properties");
+  check(H5Pset_create_intermediate_group(lcpl, 1), "link properties");
+  return lcpl;
+}
+
+H open_file(const std::string& path) {
   silence_errors();
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an HDF5 file");
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
-  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  H f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, file_access()), H5Fclose);
   if (f < 0) throw Error(path + ": not an HDF5 file (or unreadable)");
   return f;
+}
+
+H create_memory_file() {
+  silence_errors();
+  H f(H5Fcreate(memory_name, H5F_ACC_TRUNC, H5P_DEFAULT, memory_access()), H5Fclose);
+  check_id(f, "create a file in memory");
+  return f;
+}
+
+H open_memory_file(const std::vector<char>& image, const std::string& path) {
+  silence_errors();
+  if (image.empty()) throw Error(path + ": is empty, not an HDF5 file");
+  H fapl = memory_access();
+  check(H5Pset_file_image(fapl, const_cast<char*>(image.data()), image.size()), "file image of " + path);  // copied
+  H f(H5Fopen(memory_name, H5F_ACC_RDWR, fapl), H5Fclose);
+  if (f < 0) throw Error(path + ": not a readable HDF5 results file");
+  return f;
+}
+
+std::vector<char> file_image(hid_t file) {
+  check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush (in memory)");
+  const ssize_t n = H5Fget_file_image(file, nullptr, 0);
+  if (n < 0) throw Error("HDF5: file image size failed");
+  std::vector<char> image(static_cast<size_t>(n));
+  if (H5Fget_file_image(file, image.data(), image.size()) != n) throw Error("HDF5: file image failed");
+  return image;
 }
 
 void silence_errors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }

@@ -2,6 +2,7 @@
 // checked calls, and scalar attributes / 1-D datasets of the recorder's value types.
 #pragma once
 
+#include "h5handle.hpp"
 #include "record.hpp"
 
 #include <hdf5.h>
@@ -12,25 +13,14 @@
 
 namespace xb::h5 {
 
-// Closes an HDF5 handle when it goes out of scope.
-struct H {
-  hid_t id;
-  herr_t (*close)(hid_t);
-  H(hid_t i, herr_t (*c)(hid_t)) : id(i), close(c) {}
-  ~H() {
-    if (id >= 0) close(id);
-  }
-  H(const H&) = delete;
-  H& operator=(const H&) = delete;
-  operator hid_t() const { return id; }
-};
-
 // Throw xb::Error("HDF5: <what> failed") on a negative status or id.
 void check(herr_t e, const std::string& what);
 void check_id(hid_t id, const std::string& what);
-// A variable-length UTF-8 string type (caller closes).
-hid_t string_type();
+// A variable-length UTF-8 string type.
+H string_type();
 void write_attr(hid_t obj, const std::string& name, const AttrValue& v);
+// Link creation properties that create missing intermediate groups.
+H link_create_plist();
 // A 1-D dataset; a '/' in the name creates intermediate groups.
 void write_dataset(hid_t group, const std::string& name, const DataValue& v);
 
@@ -47,12 +37,25 @@ enum class Kind { missing, dangling, group, dataset, other };
 Kind link_kind(hid_t loc, const std::string& name);
 const char* kind_text(Kind k);
 // Opens `name` under `loc` when it is a group (a dataset); else throws "<where>: <name> is ...".
-hid_t open_group(hid_t loc, const std::string& name, const std::string& where);
-hid_t open_dataset(hid_t loc, const std::string& name, const std::string& where);
+H open_group(hid_t loc, const std::string& name, const std::string& where);
+H open_dataset(hid_t loc, const std::string& name, const std::string& where);
 // The names of a group's links, in name order.
 std::vector<std::string> link_names(hid_t group, const std::string& where);
 // An HDF5 file opened read-only, or "<path>: no such file / is a directory / not an HDF5 file".
-hid_t open_file(const std::string& path);
+H open_file(const std::string& path);
+
+// Files we write are built in memory (HDF5's core driver, no backing store) and their image
+// written through the atomic layer (atomic_file.hpp) by us: HDF5 itself never writes to disk, so
+// a full disk cannot leave an HDF5 file half-written and half-closed inside the library (the
+// crash of issue 33 in its exit handlers), and every failed write is met in one place, with its
+// errno, where the test hook (io_fault.hpp) can fail it too. The cost is the file's size in
+// memory, twice while its image is taken; results and captured systems are MBs, not GBs.
+// Each file closes strongly: closing it closes every object still open in it.
+H create_memory_file();
+// A read-write copy in memory of `image`, the bytes of `path` (named in the error if they are not HDF5).
+H open_memory_file(const std::vector<char>& image, const std::string& path);
+// The bytes of a file built in memory, flushed first.
+std::vector<char> file_image(hid_t file);
 // Turns off HDF5's printing of error stacks (we report our own messages); idempotent.
 void silence_errors();
 

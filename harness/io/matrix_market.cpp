@@ -31,8 +31,8 @@ std::string lower(std::string s) {
 
 }  // namespace
 
-void write_matrix_market(const std::string& path, const SparseMatrix& A) {
-  write_text_atomically(path, [&](std::FILE* f) {
+void write_matrix_market(TmpFile& out, const SparseMatrix& A) {
+  out.write_text([&](std::FILE* f) {
     long long lower_nnz = 0;
     for (int i = 0; i < A.outerSize(); ++i)
       for (SparseMatrix::InnerIterator it(A, i); it; ++it)
@@ -46,13 +46,27 @@ void write_matrix_market(const std::string& path, const SparseMatrix& A) {
   });
 }
 
-void write_matrix_market(const std::string& path, const Vector& b) {
-  write_text_atomically(path, [&](std::FILE* f) {
+void write_matrix_market(TmpFile& out, const Vector& b) {
+  out.write_text([&](std::FILE* f) {
     std::fprintf(f, "%%%%MatrixMarket matrix array real general\n");
     std::fprintf(f, "%% xpbd-bench dual system right-hand side b\n");
     std::fprintf(f, "%lld 1\n", static_cast<long long>(b.size()));
     for (long i = 0; i < b.size(); ++i) std::fprintf(f, "%.17g\n", b[i]);
   });
+}
+
+void write_matrix_market(const std::string& path, const SparseMatrix& A) {
+  make_parent(path);
+  TmpFile out(path);
+  write_matrix_market(out, A);
+  out.commit();
+}
+
+void write_matrix_market(const std::string& path, const Vector& b) {
+  make_parent(path);
+  TmpFile out(path);
+  write_matrix_market(out, b);
+  out.commit();
 }
 
 SparseMatrix read_matrix_market_matrix(const std::string& path) {

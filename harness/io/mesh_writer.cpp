@@ -1,26 +1,27 @@
 #include "mesh_writer.hpp"
 
+#include "atomic_file.hpp"
+
 #include "../../core/error.hpp"
 
 #include <bit>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 
 namespace xb {
 
 namespace {
 template <class T>
-void put(std::ofstream& out, T v) {
+void put(std::ostream& out, T v) {
   static_assert(std::endian::native == std::endian::little, "binary PLY is written little-endian");
   out.write(reinterpret_cast<const char*>(&v), sizeof v);
 }
 }  // namespace
 
 void write_ply(const std::string& path, const Problem& prob, const Eigen::Matrix3Xd& x, bool binary) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error(path + ": cannot write");
+  std::ostringstream out(std::ios::binary);  // in memory, then written whole or not at all
   const bool edges = prob.surface.empty();
   const size_t nf = edges ? prob.distance.size() : prob.surface.size();
   out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\ncomment xpbd-bench " << prob.name
@@ -49,8 +50,8 @@ void write_ply(const std::string& path, const Problem& prob, const Eigen::Matrix
     else
       for (const auto& f : prob.surface) out << "3 " << f[0] << " " << f[1] << " " << f[2] << "\n";
   }
-  out.close();
-  if (!out) throw Error(path + ": write failed");
+  const std::string bytes = std::move(out).str();
+  write_file_atomically(path, bytes.data(), bytes.size());
 }
 
 std::string frame_ply_path(const std::string& dir, const std::string& prefix, int frame) {

@@ -20,8 +20,7 @@ namespace {
 using namespace h5;
 
 void write_run(hid_t file, const RunRecord& r) {
-  H lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
-  H5Pset_create_intermediate_group(lcpl, 1);
+  H lcpl = link_create_plist();
   const std::string path = "/runs/" + r.name;
   if (H5Lexists(file, "/runs", H5P_DEFAULT) > 0 && H5Lexists(file, path.c_str(), H5P_DEFAULT) > 0)
     throw Error("results file already has a run named '" + r.name + "'");
@@ -78,39 +77,30 @@ RunRecord read_run(hid_t runs, const std::string& name, const std::string& where
 
 void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh) {
   for (const auto& r : runs) check_against_schema(r);
-  TmpFile tmp(path);  // removed on every failure path
-  hid_t fid;
   std::error_code ec;
-  if (!fresh && fs::exists(path)) {
-    fs::copy_file(path, tmp.path(), fs::copy_options::overwrite_existing, ec);
-    if (ec) throw Error("cannot copy " + path + " to " + tmp.path() + ": " + ec.message());
-    fid = H5Fopen(tmp.path().c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
-    if (fid < 0) throw Error(path + ": not a readable HDF5 results file");
-  } else {
-    if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path(), ec);
-    fid = H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    if (fid < 0) throw Error("cannot create " + tmp.path());
-  }
+  const bool append = !fresh && fs::exists(path, ec);
+  std::vector<char> image;
   {
-    H file(fid, H5Fclose);
-    if (fresh || !fs::exists(path)) {
+    // The new file, in memory; closed (every object in it) before a byte reaches the disk.
+    H file = append ? open_memory_file(read_file(path), path) : create_memory_file();
+    if (!append) {
       write_attr(file, "schema_version", static_cast<long long>(schema_version));
       write_attr(file, "generator", std::string("xpbd-bench"));
     } else if (link_kind(file, "/runs") != Kind::group) {
       throw Error(path + ": not an xpbd-bench results file (no group /runs); refusing to append to it");
     }
     for (const auto& r : runs) write_run(file, r);
-    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
+    image = file_image(file);
   }
-  tmp.commit();
+  write_file_atomically(path, image.data(), image.size());
 }
 
 std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets, std::vector<std::string>* skipped) {
-  H file(open_file(path), H5Fclose);
+  H file = open_file(path);
   const Kind k = link_kind(file, "/runs");
   if (k == Kind::missing) throw Error(path + ": not an xpbd-bench results file (no group /runs)");
   if (k != Kind::group) throw Error(path + ": /runs is " + std::string(kind_text(k)) + ", expected the group of runs");
-  H runs(open_group(file, "/runs", path), H5Gclose);
+  H runs = open_group(file, "/runs", path);
   std::vector<RunRecord> out;
   for (const auto& name : link_names(runs, path + ": /runs")) {
     try {

@@ -1,9 +1,10 @@
 // The HDF5 recorder. One group per run under /runs, its scalars as attributes and its
 // per-iteration arrays as 1-D datasets; the schema is in results/README.md.
 //
-// A run is written completely or not at all: every append copies the file to FILE.tmp, adds the
-// runs there, flushes it to disk and renames it over FILE (rename is atomic), so an interrupt
-// (Ctrl-C, SIGKILL, power loss) leaves the previous complete file.
+// A run is written completely or not at all: every append reads FILE into memory, adds the runs
+// there, writes the new file to FILE.tmp, flushes it to disk and renames it over FILE (rename is
+// atomic), so an interrupt (Ctrl-C, SIGKILL, power loss) or a full disk leaves the previous
+// complete file (atomic_file.hpp; a failed write throws WriteError naming FILE and the cause).
 #pragma once
 
 #include "record.hpp"

@@ -17,11 +17,9 @@ namespace xb {
 using h5::H;
 
 void write_state(const std::string& path, const SimState& s, const Params& p) {
-  if (fs::path(path).has_parent_path()) fs::create_directories(fs::path(path).parent_path());
-  TmpFile tmp(path);
+  std::vector<char> image;
   {
-    H file(H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    if (file < 0) throw Error("--save-state: cannot create " + tmp.path());
+    H file = h5::create_memory_file();  // written by us, whole or not at all (h5io.hpp)
     RunRecord r;  // the parameters and provenance, as for a run
     add_provenance(r, p);
     for (const auto& [k, v] : r.attrs) h5::write_attr(file, k, v);
@@ -31,16 +29,16 @@ void write_state(const std::string& path, const SimState& s, const Params& p) {
     h5::write_attr(file, "particles", static_cast<long long>(s.x.cols()));
     h5::write_dataset(file, "positions", std::vector<double>(s.x.data(), s.x.data() + s.x.size()));
     h5::write_dataset(file, "velocities", std::vector<double>(s.v.data(), s.v.data() + s.v.size()));
-    h5::check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
+    image = h5::file_image(file);
   }
-  tmp.commit();
+  write_file_atomically(path, image.data(), image.size());
 }
 
 SimState read_state(const std::string& path) {
   const std::string where = "--load-state: " + path;
   std::optional<H> file;
   try {
-    file.emplace(h5::open_file(path), H5Fclose);
+    file.emplace(h5::open_file(path));
   } catch (const Error& e) {
     throw Error(std::string("--load-state: ") + e.what());
   }
@@ -61,7 +59,7 @@ SimState read_state(const std::string& path) {
   s.frame = static_cast<int>(integer("frame", 0, 2000000000));
   const long long n = integer("particles", 1, 1LL << 30);
   for (const char* name : {"positions", "velocities"}) {
-    H d(h5::open_dataset(*file, name, where), H5Dclose);
+    H d = h5::open_dataset(*file, name, where);
     const DataValue dv = h5::read_dataset(d, where + ": " + name);
     const auto* v = std::get_if<std::vector<double>>(&dv);
     if (!v) throw Error(where + ": " + name + " does not hold floats");

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <sstream>
 #include <type_traits>
 #include <vector>
@@ -26,9 +27,9 @@ using namespace h5;
 
 template <class T>
 void write_array(hid_t file, const char* name, const T* data, hsize_t n, hid_t type) {
-  H lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
-  H5Pset_create_intermediate_group(lcpl, 1);
+  H lcpl = link_create_plist();
   H space(H5Screate_simple(1, &n, nullptr), H5Sclose);
+  check_id(space, std::string("dataspace of ") + name);
   H ds(H5Dcreate2(file, name, type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
   check(ds < 0 ? -1 : 0, std::string("create dataset ") + name);
   if (n) check(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), std::string("write ") + name);
@@ -38,7 +39,7 @@ void write_array(hid_t file, const char* name, const T* data, hsize_t n, hid_t t
 // only when T is an integer type (indices must not be rounded).
 template <class T>
 std::vector<T> read_array(hid_t file, const std::string& path, const std::string& name) {
-  H ds(open_dataset(file, name, path), H5Dclose);
+  H ds = open_dataset(file, name, path);
   DataValue v = read_dataset(ds, path + ": " + name);
   if (auto* i = std::get_if<std::vector<long long>>(&v)) return std::vector<T>(i->begin(), i->end());
   if (auto* d = std::get_if<std::vector<double>>(&v); d && std::is_floating_point_v<T>) return std::vector<T>(d->begin(), d->end());
@@ -137,16 +138,14 @@ SparseMatrix read_csr(hid_t file, const std::string& path, const std::string& g,
 }
 }  // namespace
 
-void write_system_h5(const std::string& path, const CapturedSystem& sys) {
+void write_system_h5(TmpFile& out, const CapturedSystem& sys) {
   const SparseMatrix& A = sys.A;
   const Vector& b = sys.b;
   if (A.rows() != A.cols() || A.rows() != b.size()) throw Error("write_system_h5: A is not square or b has the wrong size");
   if (!A.isCompressed()) throw Error("write_system_h5: A must be compressed");
-  make_parent(path);
-  TmpFile tmp(path);
+  std::vector<char> image;
   {
-    H file(H5Fcreate(tmp.path().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
-    if (file < 0) throw Error("cannot create " + tmp.path());
+    H file = create_memory_file();  // written by us, whole or not at all (h5io.hpp)
     const long long n = A.rows(), nnz = A.nonZeros();
     write_csr(file, "/A", A);
     write_array(file, "/b", b.data(), static_cast<hsize_t>(n), H5T_NATIVE_DOUBLE);
@@ -162,13 +161,20 @@ void write_system_h5(const std::string& path, const CapturedSystem& sys) {
     write_attr(file, "generator", std::string("xpbd-bench"));
     write_attr(file, "rows", n);
     write_attr(file, "nnz", nnz);
-    check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush");
+    image = file_image(file);
   }
-  tmp.commit();
+  out.write(image.data(), image.size());
+}
+
+void write_system_h5(const std::string& path, const CapturedSystem& sys) {
+  make_parent(path);
+  TmpFile out(path);
+  write_system_h5(out, sys);
+  out.commit();
 }
 
 CapturedSystem read_system_h5(const std::string& path) {
-  H file(open_file(path), H5Fclose);
+  H file = open_file(path);
   CapturedSystem s;
   s.attrs = read_attrs(file, path + ": root");
   if (attr_text(s.attrs, "kind") != "dual_system")
@@ -197,19 +203,38 @@ CapturedSystem read_system_h5(const std::string& path) {
 }
 
 std::vector<std::string> write_captured_system(const std::string& prefix, const CapturedSystem& sys) {
-  std::vector<std::string> written = {prefix + ".h5", prefix + "_A.mtx", prefix + "_b.mtx"};
-  write_matrix_market(prefix + "_A.mtx", sys.A);
-  write_matrix_market(prefix + "_b.mtx", sys.b);
-  if (sys.has_primal() && (sys.alpha_tilde.array() > 0).all()) {
-    PrimalSystem ps(sys.graph);
-    ps.fill(sys.grad, sys.alpha_tilde);
-    Vector f;
-    ps.rhs(sys.grad, sys.alpha_tilde, sys.b, f);
-    write_matrix_market(prefix + "_K.mtx", ps.K());
-    write_matrix_market(prefix + "_f.mtx", f);
-    written.insert(written.end(), {prefix + "_K.mtx", prefix + "_f.mtx"});
+  // Every file is written to its .tmp first and only then are they renamed, so a full disk
+  // leaves the files of an earlier capture with this prefix as they were, all of them.
+  make_parent(prefix);
+  std::vector<std::unique_ptr<TmpFile>> files;
+  try {
+    auto next = [&](const std::string& suffix) -> TmpFile& { return *files.emplace_back(std::make_unique<TmpFile>(prefix + suffix)); };
+    write_matrix_market(next("_A.mtx"), sys.A);
+    write_matrix_market(next("_b.mtx"), sys.b);
+    if (sys.has_primal() && (sys.alpha_tilde.array() > 0).all()) {
+      PrimalSystem ps(sys.graph);
+      ps.fill(sys.grad, sys.alpha_tilde);
+      Vector f;
+      ps.rhs(sys.grad, sys.alpha_tilde, sys.b, f);
+      write_matrix_market(next("_K.mtx"), ps.K());
+      write_matrix_market(next("_f.mtx"), f);
+    }
+    write_system_h5(next(".h5"), sys);
+    for (auto& f : files) f->finish();  // every byte on disk before the first rename
+  } catch (const WriteError& e) {
+    throw WriteError(e.path, e.err, std::string(e.what()) + "; no file of " + prefix + " was replaced");
   }
-  write_system_h5(prefix + ".h5", sys);
+  std::string replaced;
+  for (auto& f : files) {  // the .h5 last, as it always was
+    try {
+      f->commit();
+    } catch (const WriteError& e) {
+      throw WriteError(e.path, e.err, std::string(e.what()) + (replaced.empty() ? "; no file of " + prefix + " was replaced" : "; already replaced: " + replaced));
+    }
+    replaced += (replaced.empty() ? "" : ", ") + f->target();
+  }
+  std::vector<std::string> written = {prefix + ".h5"};
+  for (size_t i = 0; i + 1 < files.size(); ++i) written.push_back(files[i]->target());
   return written;
 }
 

@@ -14,6 +14,7 @@
 // Every file is written to NAME.tmp and renamed, so a failed capture leaves no partial file.
 #pragma once
 
+#include "atomic_file.hpp"
 #include "matrix_market.hpp"
 #include "record.hpp"
 
@@ -44,14 +45,17 @@ SparseMatrix jacobian_csr(const ConstraintGraph& graph, const Gradients& grad);
 void jacobian_from_csr(const SparseMatrix& J, ConstraintGraph& graph, Gradients& grad);
 
 // Writes PREFIX.h5 with A, b, the primal data (if present) and attrs (rows, nnz and kind are
-// added). Throws xb::Error.
+// added), atomically, or into `out` (committed by the caller). Throws xb::Error (WriteError for
+// a failed write).
 void write_system_h5(const std::string& path, const CapturedSystem& sys);
+void write_system_h5(TmpFile& out, const CapturedSystem& sys);
 // Reads a file written by write_system_h5; throws xb::Error naming the file and what is wrong
 // (missing, not HDF5, not a captured system, inconsistent CSR arrays).
 CapturedSystem read_system_h5(const std::string& path);
 
 // Writes PREFIX.h5, PREFIX_A.mtx and PREFIX_b.mtx, and PREFIX_K.mtx and PREFIX_f.mtx when the
-// system has its primal data and every α̃ > 0. Returns the paths written.
+// system has its primal data and every α̃ > 0: all to their .tmp files first, then renamed (a
+// failed write leaves every earlier file of PREFIX as it was). Returns the paths written.
 std::vector<std::string> write_captured_system(const std::string& prefix, const CapturedSystem& sys);
 
 // The attribute as text (integers as integers, doubles with %.17g), "" if absent.

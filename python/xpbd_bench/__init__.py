@@ -27,9 +27,9 @@ if "numpy" not in sys.modules:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from . import _core  # noqa: E402
-from ._core import Error, System, scenes, parameters  # noqa: E402
+from ._core import Error, System, WriteError, scenes, parameters  # noqa: E402
 
-__all__ = ["Error", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read", "load_system"]
+__all__ = ["Error", "WriteError", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read", "load_system"]
 
 
 def solvers():
