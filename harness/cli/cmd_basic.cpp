@@ -44,6 +44,33 @@ int cmd_schema(const CommandArgs& argv) {
   return 0;
 }
 
+namespace {
+// The files a run writes as it goes (--write-meshes: DIR/<scene>_<solver>_NNNN.ply per frame;
+// --save-state after frame F), from inside the stepper. The stepper turns any exception into a run
+// with status error; a failed write (a full disk) is kept in `failed` too, to end the command.
+void add_frame_writers(RunOptions& opt, const Args& args, const Problem& prob, const std::string& name,
+                       const std::string& save_state, int state_frame, const Params& q, std::optional<WriteError>& failed) {
+  auto keeping = [&failed](auto write) {
+    return [&failed, write](auto&&... a) {
+      try {
+        write(a...);
+      } catch (const WriteError& e) {
+        failed.emplace(e);
+        throw;
+      }
+    };
+  };
+  if (args.has("--write-meshes"))
+    opt.on_frame = keeping([&prob, dir = args.get("--write-meshes"), name](int frame, const Eigen::Matrix3Xd& x) {
+      write_ply(frame_ply_path(dir, name, frame), prob, x);
+    });
+  if (!save_state.empty())
+    opt.on_state = keeping([&q, save_state, state_frame](const SimState& s) {
+      if (s.frame == state_frame + 1) write_state(save_state, s, q);
+    });
+}
+}  // namespace
+
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
             {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}, {"--profile"}, {"--quiet", false},
@@ -103,20 +130,12 @@ int cmd_run(const CommandArgs& argv) {
     RunOptions run_opt = opt;
     const std::string which = runs.size() > 1 ? "run " + std::to_string(index + 1) + "/" + std::to_string(runs.size()) : "";
     run_opt.on_iteration = [&line, which](const IterationProgress& s) { line.set_iteration(s, which); };
-    if (args.has("--write-meshes")) {  // DIR/<scene>_<solver>_NNNN.ply per frame
-      const std::string dir = args.get("--write-meshes");
-      // The name is captured by value: clang 14 cannot capture a structured binding.
-      run_opt.on_frame = [&, dir, name = p.scene + "_" + tag](int frame, const Eigen::Matrix3Xd& x) {
-        write_ply(frame_ply_path(dir, name, frame), prob, x);
-      };
-    }
-    if (!save_state.empty())
-      run_opt.on_state = [&](const SimState& s) {
-        if (s.frame == state_frame + 1) write_state(save_state, s, q);
-      };
+    std::optional<WriteError> failed;  // a mesh or state that could not be written ends the command
+    add_frame_writers(run_opt, args, prob, p.scene + "_" + tag, save_state, state_frame, q, failed);
     const RunResult res = run_simulation(prob, q, method, run_opt);
     line.stop();
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
+    if (failed) throw command_write_error("run", *failed, out, index);
     ++index;
     append_command_run("run", out, make_simulation_record(run_name(index, p.scene, tag), q, method, res), index == 1, index - 1);
   }

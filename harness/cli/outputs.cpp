@@ -94,10 +94,16 @@ void append_command_run(const std::string& command, const std::string& out, cons
   try {
     append_runs(out, {run}, fresh);
   } catch (const WriteError& e) {
-    std::string line = command + ": " + e.what();
-    if (kept > 0) line += "; it holds the " + std::to_string(kept) + (kept == 1 ? " run" : " runs") + " finished before";
-    throw WriteError(e.path, e.err, line + hint);
+    throw command_write_error(command, e, "it", kept, hint);
   }
+}
+
+WriteError command_write_error(const std::string& command, const WriteError& e, const std::string& holder, int kept,
+                               const std::string& hint) {
+  std::string line = command + ": " + e.what();
+  if (kept > 0)
+    line += "; " + holder + " holds the " + std::to_string(kept) + (kept == 1 ? " run" : " runs") + " finished before";
+  return WriteError(e.path, e.err, line + hint);
 }
 
 }  // namespace xb

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "../params.hpp"
+#include "../io/atomic_file.hpp"
 #include "../io/record.hpp"
 
 #include <string>
@@ -32,5 +33,9 @@ void check_replaceable(const std::string& command, const std::string& out);
 // write), then `hint` (what to do next) if given. The file itself is left as it was.
 void append_command_run(const std::string& command, const std::string& out, const RunRecord& run, bool fresh,
                         int kept, const std::string& hint = "");
+// That line for any failed write of a command: "<command>: <e>; <holder> holds the <kept> runs
+// finished before<hint>".
+WriteError command_write_error(const std::string& command, const WriteError& e, const std::string& holder, int kept,
+                               const std::string& hint = "");
 
 }  // namespace xb

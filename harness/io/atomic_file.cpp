@@ -39,7 +39,10 @@ std::string errno_text(int err) {
 TmpFile::TmpFile(std::string path) : path_(std::move(path)), tmp_(path_ + ".tmp") {
   ::unlink(tmp_.c_str());  // a stale one from a killed run
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd_ < 0) throw WriteError(path_, errno, "cannot create " + tmp_ + ": " + errno_text(errno) + " (" + path_ + " is left as it was)");
+  if (fd_ < 0) {
+    const int e = errno;  // before anything else can change it
+    throw WriteError(path_, e, "cannot create " + tmp_ + ": " + errno_text(e) + " (" + path_ + " is left as it was)");
+  }
 }
 
 TmpFile::~TmpFile() {
@@ -60,7 +63,10 @@ void TmpFile::put(const char* data, std::size_t n) {
   while (n > 0) {
     const ssize_t k = ::write(fd_, data, n);
     if (k < 0 && errno == EINTR) continue;
-    if (k < 0) fail("write " + path_, errno);
+    if (k < 0) {
+      const int e = errno;
+      fail("write " + path_, e);
+    }
     if (k == 0) fail("write " + path_, ENOSPC);  // no progress on a regular file: the device is full
     data += k;
     n -= static_cast<std::size_t>(k);
@@ -102,7 +108,10 @@ void TmpFile::write_text(const std::function<void(std::FILE*)>& body) {
     }
   };
   std::FILE* f = ::fopencookie(&cookie, "w", io);
-  if (!f) fail("write " + path_, errno);
+  if (!f) {
+    const int e = errno;
+    fail("write " + path_, e);
+  }
   try {
     body(f);
   } catch (...) {
@@ -120,9 +129,14 @@ void TmpFile::finish() {
   if (!pending_.empty()) put(pending_.data(), pending_.size());
   pending_.clear();
   if (const int e = io_fault::next_write()) fail("flush " + path_ + " to disk", e);
-  if (::fsync(fd_) != 0) fail("flush " + path_ + " to disk", errno);
-  const int fd = std::exchange(fd_, -1);
-  if (::close(fd) != 0) fail("close " + path_, errno);
+  if (::fsync(fd_) != 0) {
+    const int e = errno;
+    fail("flush " + path_ + " to disk", e);
+  }
+  if (::close(std::exchange(fd_, -1)) != 0) {
+    const int e = errno;
+    fail("close " + path_, e);
+  }
 }
 
 void TmpFile::commit() {

@@ -59,7 +59,7 @@ def check_failed(case, rc, err, target, before, words, kept=None, named=None):
     if os.path.exists(target) and read(target) != before:
         fail(case, f"{target} changed")
     folder = os.path.dirname(target)
-    left = [f for f in os.listdir(folder) if f.endswith(".tmp")]
+    left = [f for _, _, files in os.walk(folder) for f in files if f.endswith(".tmp")]
     if left:
         fail(case, f".tmp left behind: {left}")
     return lines[0] if lines else ""
@@ -108,7 +108,22 @@ def command_cases(binary, work):
     cases.append(("sweep, second write fails",
                   lambda: kept_case(binary, work, sweep, earlier, "it holds the 2 runs finished before")))
     cases += capture_cases(binary, work)
+    cases += [(f"run {flag}", lambda f=flag, n=named: side_file_case(binary, work, run, f, n))
+              for flag, named in (("--write-meshes", "cloth_hang_mgpbd_0000.ply"), ("--save-state", "state.h5"))]
     return cases
+
+
+def side_file_case(binary, work, run, flag, named):
+    """A mesh or state that cannot be written ends the command too (the stepper would make it a
+    run with status error and go on)."""
+    folder = tempfile.mkdtemp(dir=work)
+    out = os.path.join(folder, "F.h5")
+    side = os.path.join(folder, "meshes" if flag == "--write-meshes" else "state.h5")
+    extra = [flag, side] + (["--frame-of-state", "0"] if flag == "--save-state" else [])
+    rc, err = xb(binary, run + extra + ["--out", out], {"XB_FAULT_WRITE": "1:ENOSPC"})
+    check_failed(f"run {flag}", rc, err, out, b"", "no space left on device", named=named)
+    if os.path.exists(out):
+        fail(f"run {flag}", "the run was recorded after its mesh or state failed")
 
 
 def one_case(binary, work, case, args, earlier, env, words):
