@@ -56,23 +56,35 @@ void ElementHessians::fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const 
   for (int j = 0; j < m; ++j) blocks_[j] = geometric_stiffness_block(prob_, x, j, lambda[j], proj);
 }
 
-void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj) {
-  const int m = prob_.num_constraints();
+void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                                         ConstraintState* state) {
+  const int m = prob_.num_constraints(), nd = static_cast<int>(prob_.distance.size());
   for (int j = 0; j < m; ++j)
     if (!(alpha_tilde[j] > 0))
       throw Error("energy Hessian: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
                   " (E = sum C^2/(2 alpha) needs every alpha~ > 0)");
   blocks_.resize(m);
+  if (state) {
+    state->C.resize(m);
+    state->grad.resize(m);
+  }
 #pragma omp parallel for schedule(static)
-  for (int j = 0; j < m; ++j)
-    blocks_[j] = element(
-        prob_, x, j,
-        [&](const auto& p, const auto& q, int i) {
-          return distance_energy_hessian(p, q, prob_.distance.rest_length[i], alpha_tilde[j], proj);
-        },
-        [&](const auto& x0, const auto& x1, const auto& x2, const auto& x3, const auto& Dm_inv, int) {
-          return tet_energy_hessian(x0, x1, x2, x3, Dm_inv, alpha_tilde[j], proj);
-        });
+  for (int j = 0; j < m; ++j) {
+    double* C = state ? &state->C[j] : nullptr;
+    std::array<Eigen::Vector3d, 4>* g = state ? &state->grad[j] : nullptr;
+    if (j < nd) {
+      const auto& e = prob_.distance.idx[j];
+      Matrix12d& H = blocks_[j];
+      H.setZero();
+      H.topLeftCorner<6, 6>() = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j],
+                                                        alpha_tilde[j], proj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr);
+      if (g) (*g)[2].setZero(), (*g)[3].setZero();
+    } else {
+      const auto& e = prob_.tets.idx[j - nd];
+      blocks_[j] = tet_energy_hessian(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
+                                      alpha_tilde[j], proj, C, g);
+    }
+  }
 }
 
 void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda,

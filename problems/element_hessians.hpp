@@ -35,7 +35,10 @@ class ElementHessians {
   // blocks()[j] = π(G_j) = π(−λ_j∇²C_j(x)).
   void fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda, Projection proj);
   // blocks()[j] = π(H_j) = π((∇C_j∇C_jᵀ + C_j∇²C_j)/α̃_j) at x. Throws xb::Error if some α̃ ≤ 0.
-  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj);
+  // With `state`, also evaluate_constraints(prob, x, *state) from the same SVDs (identical values),
+  // so a Newton iteration needs one pass over the constraints, not two.
+  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                           ConstraintState* state = nullptr);
   const ElementMatrices& blocks() const { return blocks_; }
 
   // §1.4's diagonal: kd(:, p) = max(0, the diagonal of Σ_j π(G_j)'s (p, p) block) per dof, for every

@@ -134,7 +134,12 @@ TEST(ElementHessians, NewtonMatrixAndGradientMatchFiniteDifferences) {
     ElementHessians eh(c.prob);
     Eigen::Matrix3Xd x = c.prob.particles.x;
     const Eigen::Matrix3Xd x_pred = x + 0.01 * Eigen::Matrix3Xd::Random(3, x.cols());
-    eh.fill_energy_hessian(x, c.alpha_tilde, Projection::none);
+    ConstraintState at_x, ref;
+    eh.fill_energy_hessian(x, c.alpha_tilde, Projection::none, &at_x);
+    evaluate_constraints(c.prob, x, ref);  // the state from the same pass is evaluate_constraints'
+    EXPECT_EQ(at_x.C, ref.C);
+    for (int j = 0; j < c.prob.num_constraints(); ++j)
+      for (int a = 0; a < 4; ++a) EXPECT_EQ(at_x.grad[j][a], ref.grad[j][a]) << j << " " << a;
     ps.fill_energy_hessian(eh.blocks());
     const Eigen::MatrixXd K(ps.K());
     EXPECT_LE(rel(K, dense_K(c, ps, &eh.blocks(), false)), 1e-13);
