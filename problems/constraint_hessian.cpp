@@ -134,16 +134,30 @@ Eigen::Matrix<double, 4, 3> tet_shape_gradients(const Eigen::Matrix3d& Dm_inv) {
   return B;
 }
 
-Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
-                         const Eigen::Matrix<double, 4, 3>& B) {
-  // Column k of W is D vec(Q_k): particle a's 3 entries are Q_k·B(a, :)ᵀ, the columns of Q_k Bᵀ.
+namespace {
+
+// Column k is D vec(Q_k): particle a's 3 entries are Q_k·B(a, :)ᵀ, the columns of Q_k Bᵀ.
+Eigen::Matrix<double, 12, 9> modes_in_x(const ArapEigensystem& es, const Eigen::Matrix<double, 4, 3>& B) {
   Eigen::Matrix<double, 12, 9> W;
   for (int k = 0; k < 9; ++k) {
     const Eigen::Matrix<double, 3, 4> QB = es.mode[k] * B.transpose();
     W.col(k) = Eigen::Map<const Eigen::Matrix<double, 12, 1>>(QB.data());
   }
+  return W;
+}
+
+}  // namespace
+
+Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
+                         const Eigen::Matrix<double, 4, 3>& B) {
+  const Eigen::Matrix<double, 12, 9> W = modes_in_x(es, B);
   const Matrix12d H = W * mu.asDiagonal() * W.transpose();
   return (H + H.transpose()) * 0.5;  // exactly symmetric: K's blocks (p, q) and (q, p) stay transposes
+}
+
+Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
+                                                const Eigen::Matrix<double, 4, 3>& B) {
+  return modes_in_x(es, B).array().square().matrix() * mu;
 }
 
 Matrix9d tet_modes_to_F(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu) {
@@ -167,6 +181,15 @@ Matrix12d tet_geometric_stiffness(const Eigen::Vector3d& x0, const Eigen::Vector
   Eigen::Matrix<double, 9, 1> mu;
   for (int k = 0; k < 9; ++k) mu[k] = project_eigenvalue(-lambda * es.c[k], proj);
   return tet_modes_to_x(es, mu, tet_shape_gradients(Dm_inv));
+}
+
+Eigen::Matrix<double, 12, 1> tet_geometric_stiffness_diagonal(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                                                              const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
+                                                              const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj) {
+  const ArapEigensystem es = arap_eigensystem(tet_deformation_gradient(x0, x1, x2, x3, Dm_inv));
+  Eigen::Matrix<double, 9, 1> mu;
+  for (int k = 0; k < 9; ++k) mu[k] = project_eigenvalue(-lambda * es.c[k], proj);
+  return tet_modes_diagonal(es, mu, tet_shape_gradients(Dm_inv));
 }
 
 Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,

@@ -98,6 +98,9 @@ Eigen::Matrix<double, 4, 3> tet_shape_gradients(const Eigen::Matrix3d& Dm_inv);
 // exactly symmetric.
 Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
                          const Eigen::Matrix<double, 4, 3>& B);
+// Its diagonal alone (what §1.4's diagonal needs), without the 12×12 matrix.
+Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
+                                                const Eigen::Matrix<double, 4, 3>& B);
 // Σ_k μ_k vec(Q_k) vec(Q_k)ᵀ: the same in F-space.
 Matrix9d tet_modes_to_F(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu);
 
@@ -109,6 +112,10 @@ Matrix12d tet_arap_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
 Matrix12d tet_geometric_stiffness(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                                   const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj);
 // tet_energy_hessian also gives C and ∇C (tet_arap_constraint's, from the same SVD) where asked.
+// The diagonal of tet_geometric_stiffness.
+Eigen::Matrix<double, 12, 1> tet_geometric_stiffness_diagonal(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                                                              const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
+                                                              const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj);
 Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                              const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj,
                              double* C = nullptr, std::array<Eigen::Vector3d, 4>* grad = nullptr);

@@ -93,8 +93,16 @@ void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, co
   diag_.resize(m);
 #pragma omp parallel for schedule(static)
   for (int j = 0; j < m; ++j) {
-    const Matrix12d G = geometric_stiffness_block(prob_, x, j, lambda[j], proj);
-    for (int s = 0; s < 4; ++s) diag_[j][s] = G.diagonal().segment<3>(3 * s);
+    const int nd = static_cast<int>(prob_.distance.size());
+    Eigen::Matrix<double, 12, 1> d;
+    if (j < nd) {
+      d = geometric_stiffness_block(prob_, x, j, lambda[j], proj).diagonal();
+    } else {
+      const auto& e = prob_.tets.idx[j - nd];
+      d = tet_geometric_stiffness_diagonal(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
+                                           lambda[j], proj);
+    }
+    for (int s = 0; s < 4; ++s) diag_[j][s] = d.segment<3>(3 * s);
   }
   kd.resize(3, n);
   const Eigen::VectorXd& w = prob_.particles.w;

@@ -198,6 +198,12 @@ TEST(GeometricStiffness, SignConventionAndNewtonSplit) {
     EXPECT_LE(max_abs(G + lambda * hess), 1e-12 * max_abs(G)) << sigma.transpose();
     const Matrix12d H = tet_energy_hessian(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, at, Projection::none);
     EXPECT_LE(max_abs(g * g.transpose() / at + G - H), 1e-12 * max_abs(H)) << sigma.transpose();
+    for (Projection proj : {Projection::none, Projection::clamp}) {  // the diagonal alone is G's
+      const Matrix12d Gp = tet_geometric_stiffness(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, lambda, proj);
+      EXPECT_LE(max_abs(tet_geometric_stiffness_diagonal(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, lambda, proj) -
+                        Gp.diagonal()),
+                1e-12 * max_abs(G));
+    }
   }
   for (double stretch : {0.5, 1.5}) {
     const Eigen::Vector3d p = rand3(), q = rand3();
