@@ -102,10 +102,21 @@ void DualSystem::prefetch_row(int i) const {
 }
 
 void DualSystem::fill(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde) {
+  const Eigen::VectorXd& w = prob_.particles.w;
+  fill_values(s, alpha_tilde, [&](int p, const Eigen::Vector3d& ga, const Eigen::Vector3d& gb) { return w[p] * ga.dot(gb); });
+}
+
+void DualSystem::fill(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& w_dof) {
+  fill_values(s, alpha_tilde, [&](int p, const Eigen::Vector3d& ga, const Eigen::Vector3d& gb) {
+    return ga.dot(w_dof.col(p).cwiseProduct(gb));
+  });
+}
+
+template <class Dot>
+void DualSystem::fill_values(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde, Dot&& dot) {
   const int m = rows();
   const int* outer = A_.outerIndexPtr();
   double* val = A_.valuePtr();
-  const Eigen::VectorXd& w = prob_.particles.w;
   // The gradients into particle order: read in constraint order, written to each slot's incidence.
 #pragma omp parallel for schedule(static)
   for (int j = 0; j < m; ++j)
@@ -124,7 +135,7 @@ void DualSystem::fill(const ConstraintState& s, const Eigen::VectorXd& alpha_til
       if (!(free_slots_[i] >> a & 1)) continue;
       const int p = particles_[i][a];
       const Eigen::Vector3d& ga = s.grad[i][a];
-      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) row[*pos++] += w[p] * ga.dot(grad_at_[k]);
+      for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) row[*pos++] += dot(p, ga, grad_at_[k]);
     }
     val[diag_[i]] += alpha_tilde[i];
   }
@@ -147,6 +158,19 @@ void DualSystem::apply_minv_gradT(const ConstraintState& s, const Eigen::VectorX
   const Eigen::VectorXd& w = prob_.particles.w;
 #pragma omp parallel for schedule(static)
   for (int p = 0; p < static_cast<int>(out.cols()); ++p) out.col(p) *= w[p];
+}
+
+}  // namespace xb
+
+namespace xb {
+
+void DualSystem::apply_minv_gradT(const ConstraintState& s, const Eigen::VectorXd& y, const Eigen::Matrix3Xd& w_dof,
+                                  Eigen::Matrix3Xd& out) const {
+  apply_gradT(s, y, out);
+  const Eigen::VectorXd& w = prob_.particles.w;
+#pragma omp parallel for schedule(static)
+  for (int p = 0; p < static_cast<int>(out.cols()); ++p)
+    out.col(p) = w[p] > 0 ? Eigen::Vector3d(out.col(p).cwiseProduct(w_dof.col(p))) : Eigen::Vector3d::Zero();
 }
 
 }  // namespace xb

@@ -27,9 +27,16 @@ class DualSystem {
   // A's values from the gradients in `s` and α̃ (diagonal Σ w|g|² + α̃, off-diagonal
   // Σ over shared particles w·(gᵢ·gⱼ)). The pattern is unchanged.
   void fill(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde);
+  // The same with per-dof inverse masses: A = J M̃⁻¹ Jᵀ + α̃ for a diagonal M̃ = M + K̃_d (the
+  // geometric stiffness diagonal, problems/element_hessians.hpp), w_dof 3 × all particles
+  // (pinned ones ignored: they couple nothing whatever w_dof holds).
+  void fill(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& w_dof);
 
   // out = M⁻¹ ∇Cᵀ y (per particle; pinned particles get 0).
   void apply_minv_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const;
+  // out = M̃⁻¹ ∇Cᵀ y with per-dof inverse masses (pinned particles get 0).
+  void apply_minv_gradT(const ConstraintState& s, const Eigen::VectorXd& y, const Eigen::Matrix3Xd& w_dof,
+                        Eigen::Matrix3Xd& out) const;
   // out = ∇Cᵀ y (per particle, including pinned ones).
   void apply_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const;
 
@@ -45,6 +52,9 @@ class DualSystem {
   void build_incidence();  // particle → (constraint, slot)
   void build_pattern();    // A's pattern, the diagonals, the fill recipe
   void prefetch_row(int i) const;
+  // A's values with the product of particle p's gradients ga, gb weighted by dot(p, ga, gb).
+  template <class Dot>
+  void fill_values(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde, Dot&& dot);
 
   const Problem& prob_;
   SparseMatrix A_;

@@ -164,8 +164,7 @@ void PrimalSystem::build_csr() {
   std::fill(K_.valuePtr(), K_.valuePtr() + 9L * nblk, 0.0);
 }
 
-void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde) {
-  const int nb = static_cast<int>(free_.size());
+void PrimalSystem::set_inverse_alpha(const Eigen::VectorXd& alpha_tilde) {
   // One division per constraint, not nine per term: a term is (g_p g_qᵀ)·(1/α̃), in that order
   // so that the blocks (p, q) and (q, p) stay exact transposes.
   inv_alpha_.resize(alpha_tilde.size());
@@ -175,16 +174,50 @@ void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tild
                   " (the primal form needs every alpha~ > 0)");
     inv_alpha_[j] = 1.0 / alpha_tilde[j];
   }
+}
+
+void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde) {
+  set_inverse_alpha(alpha_tilde);
+  fill_values<true, false>(&grad, nullptr, nullptr);
+}
+
+void PrimalSystem::fill_with_diagonal(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& kd) {
+  if (kd.cols() != graph_.num_particles()) throw Error("primal system: kd has " + std::to_string(kd.cols()) + " columns, not one per particle");
+  set_inverse_alpha(alpha_tilde);
+  fill_values<true, false>(&grad, &kd, nullptr);
+}
+
+void PrimalSystem::fill_with_blocks(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const ElementMatrices& G) {
+  if (static_cast<int>(G.size()) != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
+  set_inverse_alpha(alpha_tilde);
+  fill_values<true, true>(&grad, nullptr, &G);
+}
+
+void PrimalSystem::fill_energy_hessian(const ElementMatrices& H) {
+  if (static_cast<int>(H.size()) != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
+  fill_values<false, true>(nullptr, nullptr, &H);
+}
+
+template <bool kGaussNewton, bool kBlocks>
+void PrimalSystem::fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd, const ElementMatrices* blocks) {
+  const int nb = static_cast<int>(free_.size());
   double* val = K_.valuePtr();
   constexpr int kAhead = 2;
 #pragma omp parallel for schedule(static)
   for (int p = 0; p < nb; ++p) {
-    // The gradients of a later node row's constraints, whose loads would otherwise stall.
+    // The gradients (and element columns) of a later node row's constraints, whose loads would
+    // otherwise stall.
     if (p + kAhead < nb)
       for (int k = inc_start_[p + kAhead]; k < inc_start_[p + kAhead + 1]; ++k) {
-        const char* g = reinterpret_cast<const char*>(grad[inc_[k] >> 2].data());
-        __builtin_prefetch(g);
-        __builtin_prefetch(g + 64);
+        if constexpr (kGaussNewton) {
+          const char* g = reinterpret_cast<const char*>((*grad)[inc_[k] >> 2].data());
+          __builtin_prefetch(g);
+          __builtin_prefetch(g + 64);
+        }
+        if constexpr (kBlocks) {
+          const char* e = reinterpret_cast<const char*>((*blocks)[inc_[k] >> 2].data() + 36 * (inc_[k] & 3));
+          for (int c = 0; c < 288; c += 64) __builtin_prefetch(e + c);
+        }
       }
     const int nbp = block_start_[p + 1] - block_start_[p];
     for (int k = 0; k < nbp; ++k) {
@@ -193,9 +226,15 @@ void PrimalSystem::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tild
       for (int t = term_start_[blk]; t < term_start_[blk + 1]; ++t) {
         const std::int64_t term = terms_[t];
         const int j = static_cast<int>(term >> 4), sp = (term >> 2) & 3, sq = term & 3;
-        B.noalias() += (grad[j][sp] * grad[j][sq].transpose()) * inv_alpha_[j];
+        if constexpr (kGaussNewton) B.noalias() += ((*grad)[j][sp] * (*grad)[j][sq].transpose()) * inv_alpha_[j];
+        // Block (sp, sq) read as the transpose of (sq, sp): a node row then reads its slot's
+        // 3 contiguous columns of each element (the blocks are exactly symmetric).
+        if constexpr (kBlocks) B += (*blocks)[j].template block<3, 3>(3 * sq, 3 * sp).transpose();
       }
-      if (block_col_[blk] == p) B.diagonal().array() += 1.0 / graph_.w[free_[p]];
+      if (block_col_[blk] == p) {
+        B.diagonal().array() += 1.0 / graph_.w[free_[p]];
+        if (kd) B.diagonal() += kd->col(free_[p]);
+      }
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) val[9 * block_start_[p] + 3 * nbp * r + 3 * k + c] = B(r, c);
     }
@@ -243,6 +282,45 @@ void PrimalSystem::recover(const Gradients& grad, const Eigen::VectorXd& alpha_t
 
 void PrimalSystem::dual_residual(const Gradients& grad, const Vector& r_K, Vector& out) const {
   apply_J(grad, r_K, -1.0, true, out);  // −J M⁻¹ r_K in one pass, no temporary
+}
+
+void PrimalSystem::dual_residual(const Gradients& grad, const Vector& r_K, const Eigen::Matrix3Xd& w_dof, Vector& out) const {
+  const int m = graph_.num_constraints();
+  out.resize(m);
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) {
+    double s = 0;
+    for (int a = 0; a < 4; ++a) {
+      const int p = graph_.particles[j][a];
+      if (p < 0 || block_of_[p] < 0) continue;
+      s += grad[j][a].dot(w_dof.col(p).cwiseProduct(r_K.segment<3>(3 * block_of_[p])));
+    }
+    out[j] = -s;
+  }
+}
+
+template <class Y>
+void PrimalSystem::inertia_minus_JT(const Gradients& grad, Y&& ys, const Eigen::Matrix3Xd& x,
+                                    const Eigen::Matrix3Xd& x_pred, Vector& out) const {
+  const int nb = static_cast<int>(free_.size());
+  out.resize(3 * nb);
+#pragma omp parallel for schedule(static)
+  for (int b = 0; b < nb; ++b) {
+    const int p = free_[b];
+    Eigen::Vector3d acc = (x.col(p) - x_pred.col(p)) / graph_.w[p];
+    for (int k = inc_start_[b]; k < inc_start_[b + 1]; ++k) acc -= grad[inc_[k] >> 2][inc_[k] & 3] * ys(inc_[k] >> 2);
+    out.segment<3>(3 * b) = acc;
+  }
+}
+
+void PrimalSystem::primal_residual(const Gradients& grad, const Eigen::VectorXd& lambda, const Eigen::Matrix3Xd& x,
+                                   const Eigen::Matrix3Xd& x_pred, Vector& g) const {
+  inertia_minus_JT(grad, [&](int j) { return lambda[j]; }, x, x_pred, g);
+}
+
+void PrimalSystem::energy_gradient(const Gradients& grad, const Eigen::VectorXd& C, const Eigen::VectorXd& alpha_tilde,
+                                   const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, Vector& out) const {
+  inertia_minus_JT(grad, [&](int j) { return -C[j] / alpha_tilde[j]; }, x, x_pred, out);
 }
 
 Eigen::MatrixXd PrimalSystem::rigid_modes(const Eigen::Matrix3Xd& x) const {

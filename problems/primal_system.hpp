@@ -11,6 +11,7 @@
 #pragma once
 
 #include "../core/sparse.hpp"
+#include "element_hessians.hpp"
 
 #include <Eigen/Dense>
 
@@ -58,6 +59,15 @@ class PrimalSystem {
   // K's values: M + Σ_j g_j g_jᵀ / α̃_j on the blocks of shared free particles. Throws xb::Error
   // if some α̃ ≤ 0 (the primal form does not exist there).
   void fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde);
+  // The top-left block M̃ in place of M (problems/element_hessians.hpp; the pattern is the same):
+  // K = M + K̃_d + Jᵀα̃⁻¹J, kd per particle (3 × all particles, as ElementHessians fills it).
+  void fill_with_diagonal(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& kd);
+  // K = M + Σ_j G_j + Jᵀα̃⁻¹J, G_j the (projected) geometric stiffness blocks, each exactly
+  // symmetric (as ElementHessians makes them: K's blocks (p, q) and (q, p) are then exact transposes).
+  void fill_with_blocks(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const ElementMatrices& G);
+  // Newton on E: K = M + Σ_j H_j = Δt²∇²E, H_j the (projected) element Hessians of ½C_j²/α̃_j,
+  // which hold the Gauss–Newton part already (no Jᵀα̃⁻¹J is added).
+  void fill_energy_hessian(const ElementMatrices& H);
   // f = Jᵀ α̃⁻¹ b.
   void rhs(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Vector& b, Vector& f) const;
   // Δλ = α̃⁻¹ (b − J Δx).
@@ -65,6 +75,14 @@ class PrimalSystem {
                Vector& dlambda) const;
   // The dual residual b − AΔλ of the recovered Δλ, from the primal residual: −J M⁻¹ r_K.
   void dual_residual(const Gradients& grad, const Vector& r_K, Vector& out) const;
+  // The same with M̃ = M + K̃_d: −J M̃⁻¹ r_K, w_dof per-dof inverse masses (shifted_inverse_masses).
+  void dual_residual(const Gradients& grad, const Vector& r_K, const Eigen::Matrix3Xd& w_dof, Vector& out) const;
+  // g = M(x − x̃) − Jᵀλ on the free particles' dof blocks (the KKT primal residual, Eq. 4).
+  void primal_residual(const Gradients& grad, const Eigen::VectorXd& lambda, const Eigen::Matrix3Xd& x,
+                       const Eigen::Matrix3Xd& x_pred, Vector& g) const;
+  // Δt²∇E = M(x − x̃) + Jᵀα̃⁻¹C, i.e. g at λ = −α̃⁻¹C (Eq. 14 times Δt²); grad and C at x.
+  void energy_gradient(const Gradients& grad, const Eigen::VectorXd& C, const Eigen::VectorXd& alpha_tilde,
+                       const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, Vector& out) const;
   // out = J v (one entry per constraint; v has one 3-block per free particle).
   void apply_J(const Gradients& grad, const Vector& v, Vector& out) const;
   // out = Jᵀ y (one 3-block per free particle).
@@ -77,6 +95,14 @@ class PrimalSystem {
   void build_incidence();  // free particles, their dof blocks, free particle → (constraint, slot)
   void build_pattern();    // K's blocks and the terms of each, then build_csr()
   void build_csr();        // K's scalar CSR pattern from its blocks (values zero)
+  void set_inverse_alpha(const Eigen::VectorXd& alpha_tilde);  // inv_alpha_, refusing α̃ ≤ 0
+  // K's values: M (+ kd on the diagonal) (+ Jᵀα̃⁻¹J if kGaussNewton) (+ Σ blocks if kBlocks).
+  template <bool kGaussNewton, bool kBlocks>
+  void fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd, const ElementMatrices* blocks);
+  // out = M(x − x̃) − Jᵀy with y_j = ys(j), on the free dof blocks.
+  template <class Y>
+  void inertia_minus_JT(const Gradients& grad, Y&& ys, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred,
+                        Vector& out) const;
   // out = sign · J (M⁻¹ if times_minv) v.
   void apply_J(const Gradients& grad, const Vector& v, double sign, bool times_minv, Vector& out) const;
 

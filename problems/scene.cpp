@@ -186,6 +186,36 @@ Problem build_mass_chain(const SceneSettings& p) {
   return prob;
 }
 
+
+// A chain of `resolution` links of total length `size` hanging from a pinned particle at the
+// origin, straight, at `angle` rad from the downward vertical (in the x-y plane), its last
+// particle mass_ratio times as heavy as the others (Tournier et al. 2015's heavy-mass chains).
+// Link compliance `compliance` (0 = rigid; variant mu1e12 makes it 1e-12 m/N, the stiffness
+// 1e12 of the tet scenes); near_degenerate makes every 10th link (from the 6th) 1e-3 as long.
+Problem build_end_mass_chain(const std::string& name, const SceneSettings& p) {
+  const int n = p.resolution + 1;
+  TriMesh m;
+  m.vertices.resize(3, n);
+  const Eigen::Vector3d dir(std::sin(p.angle), -std::cos(p.angle), 0);
+  std::vector<double> len(p.resolution, p.size / p.resolution);
+  if (p.variant == "near_degenerate") {
+    if (p.resolution < 6) throw Error("variant near_degenerate shortens every 10th link from the 6th: " + name + " needs resolution >= 6");
+    for (int i = 5; i < p.resolution; i += 10) len[i] *= 1e-3;
+  }
+  m.vertices.col(0).setZero();
+  for (int i = 1; i < n; ++i) m.vertices.col(i) = m.vertices.col(i - 1) + len[i - 1] * dir;
+  for (int i = 0; i + 1 < n; ++i) m.edges.push_back({i, i + 1});
+  SceneSettings q = p;
+  if (p.variant == "mu1e12") q.compliance = 1e-12;
+  Problem prob = make_cloth_problem(name, m, q);
+  prob.particles.w[0] = 0;
+  prob.particles.w[n - 1] = 1.0 / (p.particle_mass * p.mass_ratio);
+  return prob;
+}
+
+Problem build_heavy_rope(const SceneSettings& p) { return build_end_mass_chain("heavy_rope", p); }
+Problem build_pendulum(const SceneSettings& p) { return build_end_mass_chain("pendulum", p); }
+
 }  // namespace
 
 void flatten_some_tets(TetMesh& m) {
@@ -240,6 +270,8 @@ void flatten_some_triangles(TriMesh& m) {
   }
 }
 
+bool end_mass_scene(const std::string& scene) { return scene == "heavy_rope" || scene == "pendulum"; }
+
 void apply_variant(const SceneSettings& p, Problem& prob) {
   if (p.variant == "rigid") {
     // Infinite stiffness (Goldenthal's method): every constraint has α = 0. With redundant
@@ -247,7 +279,7 @@ void apply_variant(const SceneSettings& p, Problem& prob) {
     for (auto& a : prob.distance.compliance) a = 0;
     for (auto& a : prob.tets.compliance) a = 0;
   }
-  if (p.mass_ratio != 1) {
+  if (p.mass_ratio != 1 && !end_mass_scene(p.scene)) {  // the end-mass chains weigh their last particle only
     const int n = prob.particles.size();
     for (int i = 0; i < n; ++i) {
       if (prob.particles.w[i] == 0) continue;  // pins stay pinned
@@ -266,6 +298,9 @@ const std::vector<BuilderInfo>& scene_builders() {
       {"cantilever", "tet bar with its left 1% fixed, under gravity (authors' reinit=beam)", build_cantilever},
       {"ball_drop", "tet ball falling onto the ground plane y = 0 (the one scene with a collider)", build_ball_drop},
       {"mass_chain", "chain pinned at one end, masses growing as i^2 up to mass_ratio, under gravity", build_mass_chain},
+      {"heavy_rope", "stiff rope pinned at the top holding an end mass mass_ratio times a link particle's, released at angle",
+       build_heavy_rope},
+      {"pendulum", "multi-link pendulum, its last particle mass_ratio times as heavy, released at angle", build_pendulum},
   };
   return b;
 }
@@ -283,6 +318,8 @@ void check_scene_keys(const SceneSettings& p) {
                 p.scene + "' (it builds its own mesh; use resolution)");
   if (p.twist != 0 && p.scene != "twist_bar")
     throw Error("parameter 'twist' applies to the twist_bar scene only, not '" + p.scene + "'");
+  if (p.angle != 0 && !end_mass_scene(p.scene))
+    throw Error("parameter 'angle' applies to the heavy_rope and pendulum scenes only, not '" + p.scene + "'");
   if (p.prestretch != 1 && p.scene != "bar_hang")
     throw Error("parameter 'prestretch' applies to the bar_hang scene only, not '" + p.scene + "'");
 }

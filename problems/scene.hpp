@@ -35,14 +35,17 @@ Problem build_problem(const SceneSettings& p);
 
 // Extreme cases (the `variant` key; apply_variant_keys in params.hpp sets the keys they imply):
 //   rigid            all compliances 0 (infinite stiffness, Goldenthal's method)
-//   mu1e12           stiffness 1e12
-//   mass_ratio_1e4   masses graded by index as i² up to a ratio of 1e4
+//   mu1e12           stiffness 1e12 (heavy_rope, pendulum: link compliance 1e-12 m/N)
+//   mass_ratio_1e4   masses graded by index as i² up to a ratio of 1e4 (heavy_rope, pendulum:
+//                    the end mass 1e4 times a link particle's)
 //   dt_30hz          dt = 1/30 s
 //   near_degenerate  tet scenes: flatten_some_tets; cloth: flatten_some_triangles;
-//                    mass_chain: every 10th link 1e-3 as long as the others
+//                    mass_chain, heavy_rope, pendulum: every 10th link 1e-3 as long as the others
 // apply_variant does the part that acts on a built Problem (rigid; the mass grading of
 // mass_ratio, which mass_chain and mass_ratio_1e4 use). build_problem calls it.
 void apply_variant(const SceneSettings& p, Problem& prob);
+// heavy_rope and pendulum: mass_ratio weighs their last particle only (no i² grading).
+bool end_mass_scene(const std::string& scene);
 // Every 50th tet flattened to 1e-3 of its height (its last vertex moved towards the opposite
 // face) where that inverts no neighbour; the rest shape is this flattened mesh.
 void flatten_some_tets(TetMesh& mesh);

@@ -23,7 +23,9 @@ struct SceneSettings {
   double stiffness = 1e6;            // Pa, μ of the tet ARAP constraint (α = 1/(μ V_rest))
   double prestretch = 1.0;           // initial stretch of generated bars along their length (1 = at rest)
   double twist = 0;                  // rad: twist_bar's initial twist of the bar about its long axis, end to end
-  double mass_ratio = 1;             // heaviest/lightest particle: mass_i = particle_mass·(1 + (ratio−1)(i/(n−1))²)
+  double mass_ratio = 1;             // heaviest/lightest particle: mass_i = particle_mass·(1 + (ratio−1)(i/(n−1))²);
+                                     // heavy_rope, pendulum: the end particle's mass / a link particle's
+  double angle = 0;                  // rad: heavy_rope, pendulum: the chain's initial angle from the downward vertical
   double mesh_height = 0;            // m: mesh scenes scale the mesh so its y extent is this (0 = as the file is)
   std::string init = "none";         // squash start: none (collapsed) | enlarge (rest mesh x1.5 about its centroid)
   std::string variant = "none";      // extreme case (problems/scene.hpp: apply_variant); setting it also sets the keys it implies

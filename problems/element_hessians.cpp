@@ -1,0 +1,126 @@
+#include "element_hessians.hpp"
+
+#include "../core/error.hpp"
+
+#include <numeric>
+
+namespace xb {
+
+ElementHessians::ElementHessians(const Problem& prob) : prob_(prob) {
+  const int n = prob.particles.size(), m = prob.num_constraints();
+  inc_start_.assign(n + 1, 0);
+  for (int j = 0; j < m; ++j)
+    for (int p : prob.constraint_particles(j))
+      if (p >= 0) ++inc_start_[p + 1];
+  std::partial_sum(inc_start_.begin(), inc_start_.end(), inc_start_.begin());
+  inc_.resize(inc_start_[n]);
+  std::vector<int> pos(inc_start_.begin(), inc_start_.end() - 1);
+  for (int j = 0; j < m; ++j) {
+    const auto ps = prob.constraint_particles(j);
+    for (int s = 0; s < 4; ++s)
+      if (ps[s] >= 0) inc_[pos[ps[s]]++] = j << 2 | s;
+  }
+}
+
+namespace {
+
+// Constraint j's block by `distance(p, q, j)` or `tet(x0, x1, x2, x3, Dm_inv, t)`, padded to 12×12.
+template <class Dist, class Tet>
+Matrix12d element(const Problem& prob, const Eigen::Matrix3Xd& x, int j, Dist&& distance, Tet&& tet) {
+  const int nd = static_cast<int>(prob.distance.size());
+  if (j < nd) {
+    const auto& e = prob.distance.idx[j];
+    Matrix12d H = Matrix12d::Zero();
+    H.topLeftCorner<6, 6>() = distance(x.col(e[0]), x.col(e[1]), j);
+    return H;
+  }
+  const int t = j - nd;
+  const auto& e = prob.tets.idx[t];
+  return tet(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob.tets.Dm_inv[t], t);
+}
+
+Matrix12d geometric_stiffness_block(const Problem& prob, const Eigen::Matrix3Xd& x, int j, double lambda, Projection proj) {
+  return element(
+      prob, x, j, [&](const auto& p, const auto& q, int) { return distance_geometric_stiffness(p, q, lambda, proj); },
+      [&](const auto& x0, const auto& x1, const auto& x2, const auto& x3, const auto& Dm_inv, int) {
+        return tet_geometric_stiffness(x0, x1, x2, x3, Dm_inv, lambda, proj);
+      });
+}
+
+}  // namespace
+
+void ElementHessians::fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda, Projection proj) {
+  const int m = prob_.num_constraints();
+  blocks_.resize(m);
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) blocks_[j] = geometric_stiffness_block(prob_, x, j, lambda[j], proj);
+}
+
+void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                                         ConstraintState* state) {
+  const int m = prob_.num_constraints(), nd = static_cast<int>(prob_.distance.size());
+  for (int j = 0; j < m; ++j)
+    if (!(alpha_tilde[j] > 0))
+      throw Error("energy Hessian: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
+                  " (E = sum C^2/(2 alpha) needs every alpha~ > 0)");
+  blocks_.resize(m);
+  if (state) {
+    state->C.resize(m);
+    state->grad.resize(m);
+  }
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) {
+    double* C = state ? &state->C[j] : nullptr;
+    std::array<Eigen::Vector3d, 4>* g = state ? &state->grad[j] : nullptr;
+    if (j < nd) {
+      const auto& e = prob_.distance.idx[j];
+      Matrix12d& H = blocks_[j];
+      H.setZero();
+      H.topLeftCorner<6, 6>() = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j],
+                                                        alpha_tilde[j], proj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr);
+      if (g) (*g)[2].setZero(), (*g)[3].setZero();
+    } else {
+      const auto& e = prob_.tets.idx[j - nd];
+      blocks_[j] = tet_energy_hessian(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
+                                      alpha_tilde[j], proj, C, g);
+    }
+  }
+}
+
+void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda,
+                                                   Eigen::Matrix3Xd& kd, Projection proj) {
+  const int m = prob_.num_constraints(), n = prob_.particles.size();
+  diag_.resize(m);
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) {
+    const int nd = static_cast<int>(prob_.distance.size());
+    Eigen::Matrix<double, 12, 1> d;
+    if (j < nd) {
+      d = geometric_stiffness_block(prob_, x, j, lambda[j], proj).diagonal();
+    } else {
+      const auto& e = prob_.tets.idx[j - nd];
+      d = tet_geometric_stiffness_diagonal(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
+                                           lambda[j], proj);
+    }
+    for (int s = 0; s < 4; ++s) diag_[j][s] = d.segment<3>(3 * s);
+  }
+  kd.resize(3, n);
+  const Eigen::VectorXd& w = prob_.particles.w;
+  // Per particle in incidence order (constraints ascending): the same sum every fill.
+#pragma omp parallel for schedule(static)
+  for (int p = 0; p < n; ++p) {
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k) acc += diag_[inc_[k] >> 2][inc_[k] & 3];
+    kd.col(p) = w[p] > 0 ? Eigen::Vector3d(acc.cwiseMax(0.0)) : Eigen::Vector3d::Zero();
+  }
+}
+
+void shifted_inverse_masses(const Eigen::VectorXd& w, const Eigen::Matrix3Xd& kd, Eigen::Matrix3Xd& w_dof) {
+  const int n = static_cast<int>(w.size());
+  w_dof.resize(3, n);
+#pragma omp parallel for schedule(static)
+  for (int p = 0; p < n; ++p)
+    for (int d = 0; d < 3; ++d) w_dof(d, p) = w[p] > 0 ? 1.0 / (1.0 / w[p] + kd(d, p)) : 0.0;
+}
+
+}  // namespace xb

@@ -1,0 +1,60 @@
+// The per-constraint second-order blocks of a whole Problem, filled in parallel every outer
+// iteration into storage allocated once (problems/constraint_hessian.hpp has the single-constraint
+// formulas and the sign convention: G_j = −λ_j∇²C_j, H_j = (∇C_j∇C_jᵀ + C_j∇²C_j)/α̃_j).
+// They enter the linear step through PrimalSystem (fill_with_diagonal, fill_with_blocks,
+// fill_energy_hessian) and, for the diagonal, DualSystem's per-dof inverse masses:
+//   geometric_stiffness = diagonal   K̃_d = max(0, diag of Σ_j G_j's particle blocks) per dof;
+//                                    dual A = J(M + K̃_d)⁻¹Jᵀ + α̃, primal K = M + K̃_d + Jᵀα̃⁻¹J
+//   geometric_stiffness = full       primal K = M + Σ_j π(G_j) + Jᵀα̃⁻¹J
+//   Newton on E                      K = M + Σ_j π(H_j) = Δt²∇²E (projected), gradient Δt²∇E =
+//                                    PrimalSystem::energy_gradient, E = incremental_energy
+//                                    (harness/sim/residual_energy.hpp; Δt²E = h²·it).
+// With M̃ = M + K̃_d (or M + Σ G_j) in the top-left block the recovery is unchanged:
+// M̃Δx − JᵀΔλ = 0 and JΔx + α̃Δλ = b give Δλ = α̃⁻¹(b − JΔx) and (M̃ + Jᵀα̃⁻¹J)Δx = Jᵀα̃⁻¹b; only
+// Δx = M̃⁻¹JᵀΔλ and the dual residual −JM̃⁻¹r_K use M̃ in place of M.
+#pragma once
+
+#include "constraint_hessian.hpp"
+#include "problem.hpp"
+
+#include <Eigen/Dense>
+
+#include <vector>
+
+namespace xb {
+
+// One 12×12 block per constraint in its particle order (distance constraints use the top-left
+// 6×6, the rest stays zero). Blocks of pinned particles are kept; the assembly skips them.
+using ElementMatrices = std::vector<Matrix12d>;
+
+class ElementHessians {
+ public:
+  // Keeps a reference to prob (its constraints and masses; positions are passed in).
+  explicit ElementHessians(const Problem& prob);
+
+  // blocks()[j] = π(G_j) = π(−λ_j∇²C_j(x)).
+  void fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda, Projection proj);
+  // blocks()[j] = π(H_j) = π((∇C_j∇C_jᵀ + C_j∇²C_j)/α̃_j) at x. Throws xb::Error if some α̃ ≤ 0.
+  // With `state`, also evaluate_constraints(prob, x, *state) from the same SVDs (identical values),
+  // so a Newton iteration needs one pass over the constraints, not two.
+  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                           ConstraintState* state = nullptr);
+  const ElementMatrices& blocks() const { return blocks_; }
+
+  // §1.4's diagonal: kd(:, p) = max(0, the diagonal of Σ_j π(G_j)'s (p, p) block) per dof, for every
+  // particle (pinned ones 0). proj = none sums the exact blocks and clamps the sums; clamp/abs sum
+  // projected blocks (already ≥ 0). Does not touch blocks().
+  void geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda, Eigen::Matrix3Xd& kd,
+                                    Projection proj = Projection::none);
+
+ private:
+  const Problem& prob_;
+  ElementMatrices blocks_;
+  std::vector<std::array<Eigen::Vector3d, 4>> diag_;  // per constraint and slot: its block's diagonal
+  std::vector<int> inc_start_, inc_;                   // particle → (constraint << 2 | slot)
+};
+
+// Per-dof inverse masses of M̃ = M + K̃_d: w_dof(d, p) = 1/(1/w_p + kd(d, p)), 0 where w_p = 0.
+void shifted_inverse_masses(const Eigen::VectorXd& w, const Eigen::Matrix3Xd& kd, Eigen::Matrix3Xd& w_dof);
+
+}  // namespace xb
