@@ -29,4 +29,5 @@ NB_MODULE(_core, m) {
   nb::exception<xb::Error>(m, "Error", PyExc_ValueError);
   xb::py::bind_system(m);
   xb::py::bind_api(m);
+  xb::py::bind_amg(m);
 }
