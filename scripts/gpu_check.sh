@@ -16,6 +16,8 @@
 #       the race's loose 0.1, and writes one JSON: $OUT/gpu_check.json (gpu_captures/ without $OUT).
 #
 # SIZES=small limits both steps to the two smaller captures (one part: a single device call).
+# BENCH_ARGS adds gpu_bench options (a dry run here: BENCH_ARGS="--no-baseline --tol 0.1").
+# Without nvidia-smi (no device) nothing is installed and gpu_bench runs on NumPy.
 # Every part is carried by one device call on the same warm machine (ignored files stay there
 # between calls): carry gpu_captures/parts/00, then 01, ..., the last call running
 # `bash scripts/gpu_check.sh run` (docs/gpu.md gives the calls).
@@ -93,7 +95,7 @@ EOF
 run() {
   mkdir -p "$dir/carry"
   cat "$dir"/parts/*/chunk | tar -C "$dir/carry" -xf -
-  if ! python3 -c "import cupy" 2>/dev/null; then
+  if command -v nvidia-smi >/dev/null && ! python3 -c "import cupy" 2>/dev/null; then
     if ls .whl/*.whl >/dev/null 2>&1; then
       python3 -m pip install -q --no-index --no-deps --target /tmp/site .whl/*.whl && export PYTHONPATH=/tmp/site
     else
@@ -105,7 +107,7 @@ run() {
   local list=()
   while read -r name _; do [ -f "$dir/carry/$name.h5" ] && list+=("$dir/carry/$name.h5"); done < <(captures)
   PYTHONPATH="$root/python${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1 \
-    python3 -m xpbd_bench.gpu_bench "${list[@]}" --out "$out" --tol 1e-8 0.1 --repeat 3
+    python3 -m xpbd_bench.gpu_bench "${list[@]}" --out "$out" --tol 1e-8 0.1 --repeat 3 ${BENCH_ARGS:-}
   cp "$dir/carry/cpu_mgpbd.json" "${OUT:-$dir}/cpu_mgpbd.json" 2>/dev/null || true
   echo "gpu_check: wrote $out" >&2
 }

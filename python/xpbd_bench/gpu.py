@@ -264,6 +264,7 @@ class MgpbdGpu:
                 raise ValueError(f"MgpbdGpu: unknown setting '{key}' (amg.* keys of `xpbd-bench list`, and seed)")
         self.hierarchy = self.device = self.A = None
         self.last_frame, self.pattern, self.iterations = 0, None, []
+        self.setups = self.refreshes = 0  # full C++ setups, values-only refreshes
 
     def setup(self, A, info):
         from . import amg_hierarchy  # the C++ setup (needs the built module)
@@ -271,9 +272,12 @@ class MgpbdGpu:
         interval = int(self.settings.get("amg.setup_interval", 20))
         full = (info["action"] == "setup" or self.hierarchy is None or pattern != self.pattern
                 or info["frame"] >= self.last_frame + interval or info["frame"] < self.last_frame)
-        if full or not self.hierarchy.refresh(A):
+        if not full and self.hierarchy.refresh(A):
+            self.refreshes += 1
+        else:
             self.hierarchy = amg_hierarchy(A, info["block_size"], info["near_kernel"], self.settings)
             self.pattern, self.last_frame = pattern, info["frame"]
+            self.setups += 1
         self.device = DeviceHierarchy(self.hierarchy.export(), self.backend)
         self.A = self.backend.csr(A, np.float64)
         self.backend.synchronize()

@@ -119,6 +119,20 @@ def test_py_mgpbd_gpu_takes_mgpbds_iterations(systems, name, tmp_path):
     assert len(solver.iterations) == 2
 
 
+def test_py_mgpbd_gpu_races_inside_the_stepper(tmp_path):
+    # Two frames of the cloth in the dual form: the same outer iterations and PCG iterations per
+    # solve (±1) as mgpbd, with mgpbd's lazy setup (refreshes between the full setups).
+    g = gpu.MgpbdGpu(backend="numpy", **AMG)
+    c, p = xb.run("cloth_hang", solvers=["mgpbd", g], out=tmp_path / "r.h5", frames=2, form="dual",
+                  set=dict(AMG, resolution=12, **{"linear.forcing": "fixed"}))
+    assert c["attrs"]["status"] == p["attrs"]["status"] == "ok"
+    assert c["attrs"]["outer_iterations"] == p["attrs"]["outer_iterations"] >= 3
+    its_c, its_p = c["data"]["linear_iterations"], p["data"]["linear_iterations"]
+    assert len(its_c) == len(its_p) and np.all(np.abs(its_c - its_p) <= 1), (its_c, its_p)
+    assert list(p["data"]["linear_setup_action"]) == list(c["data"]["linear_setup_action"])
+    assert g.refreshes > 0 and g.setups == list(c["data"]["linear_setup_action"]).count("setup")
+
+
 def test_primal_pcg_on_the_dual_residual_takes_mgpbds_iterations(systems, tmp_path):
     # gpu_bench's primal stop test (linear.stop_norm = dual, as mgpbd's): the dual residual
     # G r_K of hierarchy_io's dual map, against C++ mgpbd in the primal form.
