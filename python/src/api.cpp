@@ -15,6 +15,7 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
+#include <cstdio>
 #include <map>
 
 namespace xb::py {
@@ -108,6 +109,22 @@ nb::list read(const std::string& path) {
   return l;
 }
 
+// Every run of `src` appended to `dst` (created when absent), renumbered after dst's runs
+// (names are NNNN_<scene>_<solver>): what xpbd_bench.run does with an existing out.
+int append_results(const std::string& src, const std::string& dst) {
+  std::vector<RunRecord> runs = read_runs(src, true);
+  const int existing = count_runs(dst);  // throws for a file that is not a results file
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const std::string& n = runs[i].name;
+    const size_t cut = n.find('_');
+    char index[16];
+    std::snprintf(index, sizeof index, "%04d", existing + static_cast<int>(i) + 1);
+    runs[i].name = index + (cut == std::string::npos ? "_" + n : n.substr(cut));
+  }
+  if (!runs.empty()) append_runs(dst, runs, false);
+  return existing + static_cast<int>(runs.size());
+}
+
 }  // namespace
 
 void bind_api(nb::module_& m) {
@@ -119,6 +136,10 @@ void bind_api(nb::module_& m) {
   m.def("scenes", &scene_names, "The built-in scenes.");
   m.def("solvers", &solver_list, "The built-in methods: name, kind (local | global), available, reason, description.");
   m.def("parameters", &parameter_list, "Every parameter key: key, default, doc.");
+  m.def("count_runs", &count_runs, nb::arg("path"),
+        "The number of runs in a results file (0 if absent); raises Error for a file that is not one.");
+  m.def("append_results", &append_results, nb::arg("src"), nb::arg("dst"),
+        "Appends every run of results file src to dst, numbered after dst's; returns dst's run count.");
   m.def("read", &read, nb::arg("path"), "Every run of a results file as a dict of its attributes and datasets.");
 }
 

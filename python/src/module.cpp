@@ -52,4 +52,5 @@ NB_MODULE(_core, m) {
       write_error.release().ptr());  // the module keeps it alive
   xb::py::bind_system(m);
   xb::py::bind_api(m);
+  xb::py::bind_amg(m);
 }

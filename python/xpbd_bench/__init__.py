@@ -9,7 +9,11 @@
 
 A solver is any object with `name`, `setup(A, info)` and `solve(b, tol)` returning x or
 (x, iterations); it runs inside the C++ stepper as the method py:<name>. run, capture and solve
-are the CLI's commands (same checks, same files, same records).
+are the CLI's commands (same checks, same files, same records). xpbd_bench.gpu.MgpbdGpu is mgpbd
+with its solve phase on a GPU (docs/gpu.md); amg_hierarchy gives mgpbd's levels.
+
+Without the built module _core, only the modules that do not need it import (xpbd_bench.gpu's
+solve phase, xpbd_bench.gpu_bench); the calls here then raise ImportError naming it.
 """
 import os
 import sys
@@ -26,15 +30,36 @@ if "OMP_WAIT_POLICY" not in os.environ:
 if "numpy" not in sys.modules:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from . import _core  # noqa: E402
-from ._core import Error, System, WriteError, scenes, parameters  # noqa: E402
+try:
+    from . import _core  # noqa: E402
+except ImportError as _missing:  # a GPU machine with the Python files only (gpu_bench)
+    _core_error = _missing
 
-__all__ = ["Error", "WriteError", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read", "load_system"]
+    class _Missing:
+        def __getattr__(self, name):
+            raise ImportError(f"xpbd_bench._core is not built ({_core_error}): build the project (docs/python.md)")
+
+    _core = _Missing()
+
+    class Error(ValueError):
+        """xpbd_bench's error (the built module's, when it is there)."""
+else:
+    from ._core import Error, System, WriteError, scenes, parameters  # noqa: E402
+    from .amg import AmgHierarchy, amg_hierarchy, export_hierarchy  # noqa: E402
+
+__all__ = ["Error", "WriteError", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read",
+           "load_system", "AmgHierarchy", "amg_hierarchy", "export_hierarchy"]
 
 
 def solvers():
-    """The built-in methods (dicts: name, kind, available, reason, description)."""
-    return _core.solvers()
+    """The built-in methods (dicts: name, kind, available, reason, description), and
+    py:mgpbd-gpu (xpbd_bench.gpu.MgpbdGpu): available says whether CuPy found a device (without one
+    it runs on NumPy), reason which device or why none."""
+    from .gpu import device_info
+    found, why = device_info()
+    return _core.solvers() + [{"name": "py:mgpbd-gpu", "kind": "global", "available": found, "reason": why,
+                               "description": "mgpbd with its V-cycle (float) and PCG on a GPU through CuPy "
+                                              "(xpbd_bench.gpu.MgpbdGpu(); NumPy without a device)"}]
 
 
 def read(path):
@@ -61,6 +86,8 @@ def _sets(values):
 
 def _methods(solvers_):
     """--solver's list and the protocol objects among `solvers_` (names: str, objects: py:<name>)."""
+    if solvers_ is None:
+        raise Error("solvers is None: give a method name ('mgpbd'), a solver object of the protocol, or a list of them")
     if isinstance(solvers_, (str, bytes)) or not hasattr(solvers_, "__iter__"):
         solvers_ = [solvers_]
     names, objects = [], []
@@ -86,10 +113,24 @@ def _call(name, args, objects, progress):
 def run(scene, solvers, out, frames=None, set=None, form=None, profile=None, time_budget=None, reference=False,
         progress=False):
     """`xpbd-bench run`: each solver (a built-in name or a protocol object) on the scene, every run
-    appended to `out`. `set`: any parameter keys ({"mesh": "bunny:12k", "linear.tol": 1e-2});
-    `form`: "dual", "primal" or "dual,primal" (--form). Returns read(out)."""
+    appended to `out` (an existing results file keeps its runs, the new ones numbered after them;
+    the CLI's `run` replaces its --out instead). `set`: any parameter keys ({"mesh": "bunny:12k",
+    "linear.tol": 1e-2}); `form`: "dual", "primal" or "dual,primal" (--form). Returns read(out)."""
     names, objects = _methods(solvers)
-    args = ["--scene", str(scene), "--solver", names, "--out", os.fspath(out)] + _sets(set)
+    out = os.fspath(out)
+    if os.path.exists(out):
+        _core.count_runs(out)  # refuses a file that is not a results file, before anything runs
+        with tempfile.TemporaryDirectory(prefix="xpbd_bench_run_", dir=os.path.dirname(os.path.abspath(out))) as d:
+            part = os.path.join(d, "runs.h5")
+            _run(scene, names, objects, part, frames, set, form, profile, time_budget, reference, progress)
+            _core.append_results(part, out)
+        return read(out)
+    _run(scene, names, objects, out, frames, set, form, profile, time_budget, reference, progress)
+    return read(out)
+
+
+def _run(scene, names, objects, out, frames, set, form, profile, time_budget, reference, progress):
+    args = ["--scene", str(scene), "--solver", names, "--out", out] + _sets(set)
     if frames is not None:
         args += ["--frames", str(frames)]
     if form is not None:
@@ -101,7 +142,6 @@ def run(scene, solvers, out, frames=None, set=None, form=None, profile=None, tim
     if reference:
         args.append("--reference")
     _call("run", args, objects, progress)
-    return read(out)
 
 
 def capture(scene, frame, iteration, substep=0, set=None, solver="cholmod", out=None, time_budget=None,

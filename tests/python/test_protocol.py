@@ -100,3 +100,25 @@ def test_what_is_not_a_solver_is_refused_before_anything_runs(tmp_path):
     assert not (tmp_path / "r.h5").exists()
     # A refused call leaves no solver registered: the same name runs afterwards.
     assert xb.run("squash", solvers=[Splu()], out=tmp_path / "r.h5", set=SCENE)[0]["attrs"]["solver"] == "py:splu"
+
+
+def test_run_appends_to_out_as_documented(tmp_path):
+    # A loop over solvers into one file keeps every call's runs (the CLI's run replaces its --out).
+    out = tmp_path / "r.h5"
+    for s in ("xpbd-gs", "xpbd-jacobi"):
+        runs = xb.run("cloth_hang", solvers=[s], out=out, frames=1, set={"resolution": 6})
+    assert [r["attrs"]["solver"] for r in runs] == ["xpbd-gs", "xpbd-jacobi"]
+    assert [r["name"][:5] for r in runs] == ["0001_", "0002_"]
+    assert [r["attrs"]["solver"] for r in xb.read(out)] == ["xpbd-gs", "xpbd-jacobi"]
+    # A file that is not a results file is refused before anything runs, and left as it was.
+    other = tmp_path / "notes.h5"
+    other.write_bytes(b"not hdf5")
+    with pytest.raises(xb.Error, match="notes.h5"):
+        xb.run("cloth_hang", solvers=["xpbd-gs"], out=other, frames=1, set={"resolution": 6})
+    assert other.read_bytes() == b"not hdf5"
+
+
+def test_solvers_none_is_a_sentence_naming_the_argument(tmp_path):
+    with pytest.raises(xb.Error, match="solvers is None"):
+        xb.run("squash", solvers=None, out=tmp_path / "r.h5", set=SCENE)
+    assert not (tmp_path / "r.h5").exists()

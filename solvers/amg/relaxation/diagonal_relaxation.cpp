@@ -76,6 +76,24 @@ void DiagonalRelaxation<S>::scale(const VectorOf<S>& b, double c) {
 }
 
 template <class S>
+std::vector<std::array<double, 2>> DiagonalRelaxation<S>::steps() const {
+  // jacobi: x += D⁻¹(b − Ax)/λ
+  if (!chebyshev) return {{0.0, 1.0 / lambda}};
+  // Chebyshev of `degree` (3: the authors') for D⁻¹A on [λ/30, 1.1λ] (Saad, Alg. 12.1): a fixed
+  // polynomial of D⁻¹A, the same before and after, hence a symmetric V-cycle.
+  const double hi = 1.1 * lambda, lo = lambda / 30.0;
+  const double theta = 0.5 * (hi + lo), delta = 0.5 * (hi - lo), sigma = theta / delta;
+  double rho = 1.0 / sigma;
+  std::vector<std::array<double, 2>> c{{0.0, 1.0 / theta}};
+  for (int k = 1; k < degree; ++k) {
+    const double rho_new = 1.0 / (2.0 * sigma - rho);
+    c.push_back({rho_new * rho, 2.0 * rho_new / delta});
+    rho = rho_new;
+  }
+  return c;
+}
+
+template <class S>
 void DiagonalRelaxation<S>::presmooth(const CsrOf<S>& A, const VectorOf<S>& b, VectorOf<S>& x, bool x_zero) {
   const long n = b.size();
   auto add_d = [&](bool assign) {
@@ -83,30 +101,14 @@ void DiagonalRelaxation<S>::presmooth(const CsrOf<S>& A, const VectorOf<S>& b, V
 #pragma omp parallel for schedule(static) if (n > kMinParallelRows)
     for (long i = 0; i < n; ++i) x[i] = assign ? d[i] : x[i] + d[i];
   };
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
-    const bool zero = x_zero && sweep == 0;
-    if (!chebyshev) {
-      // jacobi: x += D⁻¹(b − Ax)/λ
-      if (zero) scale(b, 1.0 / lambda);
-      else step(A, b, x, 0.0, 1.0 / lambda);
+  const std::vector<std::array<double, 2>> c = steps();
+  for (int sweep = 0; sweep < sweeps; ++sweep)
+    for (size_t k = 0; k < c.size(); ++k) {
+      const bool zero = x_zero && sweep == 0 && k == 0;  // d = c2·D⁻¹b: no product with A
+      if (zero) scale(b, c[k][1]);
+      else step(A, b, x, c[k][0], c[k][1]);
       add_d(zero);
-      continue;
     }
-    // Chebyshev of `degree` (3: the authors') for D⁻¹A on [λ/30, 1.1λ] (Saad, Alg. 12.1): a fixed
-    // polynomial of D⁻¹A, the same before and after, hence a symmetric V-cycle.
-    const double hi = 1.1 * lambda, lo = lambda / 30.0;
-    const double theta = 0.5 * (hi + lo), delta = 0.5 * (hi - lo), sigma = theta / delta;
-    double rho = 1.0 / sigma;
-    if (zero) scale(b, 1.0 / theta);
-    else step(A, b, x, 0.0, 1.0 / theta);
-    for (int k = 1;; ++k) {
-      add_d(zero && k == 1);
-      if (k == degree) break;
-      const double rho_new = 1.0 / (2.0 * sigma - rho);
-      step(A, b, x, rho_new * rho, 2.0 * rho_new / delta);
-      rho = rho_new;
-    }
-  }
 }
 
 DiagonalRelaxation<float> to_single(const DiagonalRelaxation<double>& r) {

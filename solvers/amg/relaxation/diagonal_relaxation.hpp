@@ -7,6 +7,7 @@
 
 #include "../../../core/sparse.hpp"
 
+#include <array>
 #include <vector>
 
 namespace xb::amg {
@@ -29,6 +30,10 @@ struct DiagonalRelaxation {
   // step then reads A by blocks. Not owned.
   const BlockOperator* blocks = nullptr;
 
+  // One sweep's steps (c1, c2): d = c1·d + c2·D⁻¹(b − Ax), then x += d, in order (jacobi: one
+  // step (0, 1/λ); chebyshev: `degree` steps of its three-term recurrence). presmooth runs these;
+  // the hierarchy's export (hierarchy_export.hpp) hands them to other implementations.
+  std::vector<std::array<double, 2>> steps() const;
   // x_zero: x is zero on entry (one product with A saved).
   void presmooth(const CsrOf<S>& A, const VectorOf<S>& b, VectorOf<S>& x, bool x_zero);
   void postsmooth(const CsrOf<S>& A, const VectorOf<S>& b, VectorOf<S>& x) { presmooth(A, b, x, false); }
