@@ -237,7 +237,7 @@ def mean_linear_iterations(run):
 def lagged_note(e):
     """What the lagged factor did, from the run's statistics; None for other runs."""
     a = e["run"]["attrs"]
-    if "refactorisations_in_solve" not in a or not rules.finished(e["run"]):
+    if "refactorisations_in_solve" not in a or "outer_iterations" not in a:  # a timeout's counts are real too
         return None
     kept, refac = int(float(a.get("lagged_setups", 0))), int(float(a["refactorisations_in_solve"]))
     bound = a.get("cholmod.lagged_max_iterations", "?")
