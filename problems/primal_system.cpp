@@ -188,13 +188,13 @@ void PrimalSystem::fill_with_diagonal(const Gradients& grad, const Eigen::Vector
 }
 
 void PrimalSystem::fill_with_blocks(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const ElementMatrices& G) {
-  if (static_cast<int>(G.size()) != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
+  if (G.size() != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
   set_inverse_alpha(alpha_tilde);
   fill_values<true, true>(&grad, nullptr, &G);
 }
 
 void PrimalSystem::fill_energy_hessian(const ElementMatrices& H) {
-  if (static_cast<int>(H.size()) != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
+  if (H.size() != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
   fill_values<false, true>(nullptr, nullptr, &H);
 }
 
@@ -215,8 +215,9 @@ void PrimalSystem::fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd
           __builtin_prefetch(g + 64);
         }
         if constexpr (kBlocks) {
-          const char* e = reinterpret_cast<const char*>((*blocks)[inc_[k] >> 2].data() + 36 * (inc_[k] & 3));
-          for (int c = 0; c < 288; c += 64) __builtin_prefetch(e + c);
+          const int j = inc_[k] >> 2, n = 3 * blocks->slots(j);  // slot's 3 columns: 3n doubles
+          const char* e = reinterpret_cast<const char*>(blocks->data(j) + 3 * n * (inc_[k] & 3));
+          for (int c = 0; c < 24 * n; c += 64) __builtin_prefetch(e + c);
         }
       }
     const int nbp = block_start_[p + 1] - block_start_[p];
@@ -229,7 +230,7 @@ void PrimalSystem::fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd
         if constexpr (kGaussNewton) B.noalias() += ((*grad)[j][sp] * (*grad)[j][sq].transpose()) * inv_alpha_[j];
         // Block (sp, sq) read as the transpose of (sq, sp): a node row then reads its slot's
         // 3 contiguous columns of each element (the blocks are exactly symmetric).
-        if constexpr (kBlocks) B += (*blocks)[j].template block<3, 3>(3 * sq, 3 * sp).transpose();
+        if constexpr (kBlocks) B += blocks->block(j, sq, sp).transpose();
       }
       if (block_col_[blk] == p) {
         B.diagonal().array() += 1.0 / graph_.w[free_[p]];
