@@ -10,8 +10,10 @@ tournier  heavy_rope and pendulum (problems/scenes/), variants none, mu1e12, mas
           relative Newton residual of any substep, the light particles' largest speed.
 chen      squash (--mesh) and twist_bar 7e9 (resolution 6), cholmod, 100 outer iterations with
           xpbd.primal_residual zero | keep: the relative Newton and dual residuals over iterations.
-macklin   heavy_rope, dual against primal form with jacobi-pcg (linear.tol 1e-6, fixed), under
-          mass ratio (1e0 … 1e4) and compliance (1e-4 … 1e-10): mean PCG iterations per solve.
+macklin   mass_chain (256 links, masses graded to mass_ratio), dual against primal form with
+          cg and jacobi-pcg (linear.tol 1e-6, fixed), under mass ratio (1 … 1e6, compliance 1e-8)
+          and compliance (1e-4 … 1e-10, mass ratio 1); bar_hang under stiffness 1e5 … 1e11:
+          mean (P)CG iterations per solve.
 omega     squash (--mesh): XPBD at omega 1 and 0.25 against Newton, cholmod, --reference.
 mgpbd_k   squash (--mesh): mgpbd on XPBD's K and on Newton's K (linear.forcing fixed, tol 1e-8):
           levels, operator complexity, PCG iterations per outer iteration.
@@ -91,19 +93,30 @@ def chen(args):
 
 
 def macklin(args):
-    print("| case | dual: mean PCG its | primal: mean PCG its | dual status | primal status |")
+    print("| case | dual CG | primal CG | dual Jacobi-PCG | primal Jacobi-PCG |")
     print("|---|---|---|---|---|")
-    cases = [(f"mass_ratio {m:g}", [f"mass_ratio={m}"]) for m in (1, 1e2, 1e4)]
+    cases = [(f"mass_ratio {m:g}", [f"mass_ratio={m}"]) for m in (1, 1e2, 1e4, 1e6)]
     cases += [(f"compliance {c:g}", [f"compliance={c}", "mass_ratio=1"]) for c in (1e-4, 1e-7, 1e-10)]
     for label, sets in cases:
         cells = []
-        for form in ("dual", "primal"):
-            a, d = run(args, f"m_{label.replace(' ', '_')}_{form}", "heavy_rope", "jacobi-pcg",
-                       sets + [f"form={form}", "linear.forcing=fixed", "linear.tol=1e-6", "linear.max_iterations=100000",
-                               "frames=5"])
-            li = d["linear_iterations"][d["linear_iterations"] > 0]
-            cells.append((f"{li.mean():.1f}" if len(li) else "—", a.get("status")))
-        print(f"| heavy_rope, {label} | {cells[0][0]} | {cells[1][0]} | {cells[0][1]} | {cells[1][1]} |", flush=True)
+        for solver in ("cg", "jacobi-pcg"):
+            for form in ("dual", "primal"):
+                a, d = run(args, f"m_{label.replace(' ', '_')}_{solver}_{form}", "mass_chain", solver,
+                           sets + [f"form={form}", "resolution=256", "linear.forcing=fixed", "linear.tol=1e-6",
+                                   "linear.max_iterations=100000", "frames=2"])
+                li = d["linear_iterations"][d["linear_iterations"] > 0]
+                cells.append((f"{li.mean():.1f}" if len(li) else "—") + ("" if a.get("status") == "ok" else f" ({a.get('status')})"))
+        print(f"| mass_chain 256, {label} | " + " | ".join(cells) + " |", flush=True)
+    for mu in (1e5, 1e7, 1e9, 1e11):  # a 3D case under stiffness: bar_hang, 4 cubes across (1.5K tets)
+        cells = []
+        for solver in ("cg", "jacobi-pcg"):
+            for form in ("dual", "primal"):
+                a, d = run(args, f"m_bar_{mu:g}_{solver}_{form}", "bar_hang", solver,
+                           [f"stiffness={mu}", f"form={form}", "linear.forcing=fixed", "linear.tol=1e-6",
+                            "linear.max_iterations=100000", "frames=2"])
+                li = d["linear_iterations"][d["linear_iterations"] > 0]
+                cells.append((f"{li.mean():.1f}" if len(li) else "—") + ("" if a.get("status") == "ok" else f" ({a.get('status')})"))
+        print(f"| bar_hang, stiffness {mu:g} | " + " | ".join(cells) + " |", flush=True)
 
 
 def omega(args):
