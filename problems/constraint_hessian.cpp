@@ -58,13 +58,15 @@ Matrix6d distance_geometric_stiffness(const Eigen::Vector3d& p, const Eigen::Vec
 }
 
 Matrix6d distance_energy_hessian(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double rest, double alpha_tilde,
-                                 Projection proj) {
-  const Eigen::Vector3d d = p - q;
-  const double l = d.norm();
+                                 Projection proj, double* C, Eigen::Vector3d* grad_p, Eigen::Vector3d* grad_q) {
+  Eigen::Vector3d gp, gq;
+  const double c = distance_constraint(p, q, rest, &gp, &gq);
+  if (C) *C = c;
+  if (grad_p) *grad_p = gp, *grad_q = gq;
+  const double l = (p - q).norm();
   if (!(l > 0)) return Matrix6d::Zero();
-  const Eigen::Vector3d n = d / l;
-  const Eigen::Matrix3d nn = n * n.transpose();
-  const double transverse = project_eigenvalue((l - rest) / l, proj);
+  const Eigen::Matrix3d nn = gp * gp.transpose();
+  const double transverse = project_eigenvalue(c / l, proj);
   return pair_block((nn + transverse * (Eigen::Matrix3d::Identity() - nn)) / alpha_tilde);
 }
 
@@ -72,6 +74,12 @@ ArapEigensystem arap_eigensystem(const Eigen::Matrix3d& F) {
   Eigen::Matrix3d U, V;
   Eigen::Vector3d s;
   svd_rv(F, U, s, V);
+  return arap_eigensystem(F, U, s, V);
+}
+
+ArapEigensystem arap_eigensystem(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& s,
+                                 const Eigen::Matrix3d& V) {
+  (void)F;
   ArapEigensystem es;
   es.C = std::sqrt((s.array() - 1.0).square().sum());
   const bool at_rest = es.C < tet_rest_epsilon;
@@ -86,21 +94,21 @@ ArapEigensystem arap_eigensystem(const Eigen::Matrix3d& F) {
     if (v.norm() > 1e-14) S -= 2.0 * v * v.transpose() / v.squaredNorm();
     S.col(k).swap(S.col(0));  // column 0 is ĝ
   }
-  const double r = 1.0 / std::sqrt(2.0);
+  // The modes as sums of outer products uᵢvⱼᵀ (cheaper than U·E·Vᵀ with a sparse E).
+  std::array<Eigen::Matrix3d, 3> uv;  // uᵢvᵢᵀ
+  for (int i = 0; i < 3; ++i) uv[i] = U.col(i) * V.col(i).transpose();
   for (int a = 0; a < 3; ++a) {
-    es.mode[a] = U * S.col(a).asDiagonal() * V.transpose();
+    es.mode[a] = S(0, a) * uv[0] + S(1, a) * uv[1] + S(2, a) * uv[2];
     es.psi[a] = 1;
     es.c[a] = a == 0 ? 0.0 : 1.0;
   }
+  const double r = 1.0 / std::sqrt(2.0);
   const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
   for (int t = 0; t < 3; ++t) {
     const int i = pairs[t][0], j = pairs[t][1];
-    Eigen::Matrix3d E = Eigen::Matrix3d::Zero();
-    E(i, j) = r;
-    E(j, i) = -r;
-    es.mode[3 + t] = U * E * V.transpose();
-    E(j, i) = r;
-    es.mode[6 + t] = U * E * V.transpose();
+    const Eigen::Matrix3d ij = r * U.col(i) * V.col(j).transpose(), ji = r * U.col(j) * V.col(i).transpose();
+    es.mode[3 + t] = ij - ji;
+    es.mode[6 + t] = ij + ji;
     es.psi[3 + t] = 1.0 - 2.0 / std::max(s[i] + s[j], tet_twist_epsilon);
     es.psi[6 + t] = 1;
     es.c[3 + t] = es.psi[3 + t];
@@ -126,17 +134,30 @@ Eigen::Matrix<double, 4, 3> tet_shape_gradients(const Eigen::Matrix3d& Dm_inv) {
   return B;
 }
 
+namespace {
+
+// Column k is D vec(Q_k): particle a's 3 entries are Q_k·B(a, :)ᵀ, the columns of Q_k Bᵀ.
+Eigen::Matrix<double, 12, 9> modes_in_x(const ArapEigensystem& es, const Eigen::Matrix<double, 4, 3>& B) {
+  Eigen::Matrix<double, 12, 9> W;
+  for (int k = 0; k < 9; ++k) {
+    const Eigen::Matrix<double, 3, 4> QB = es.mode[k] * B.transpose();
+    W.col(k) = Eigen::Map<const Eigen::Matrix<double, 12, 1>>(QB.data());
+  }
+  return W;
+}
+
+}  // namespace
+
 Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
                          const Eigen::Matrix<double, 4, 3>& B) {
-  Matrix12d H = Matrix12d::Zero();
-  for (int k = 0; k < 9; ++k) {
-    if (mu[k] == 0) continue;
-    // D vec(Q): particle a's 3 entries are Q·B(a, :)ᵀ, i.e. the columns of Q Bᵀ.
-    const Eigen::Matrix<double, 3, 4> QB = es.mode[k] * B.transpose();
-    const Eigen::Map<const Eigen::Matrix<double, 12, 1>> v(QB.data());
-    H.noalias() += mu[k] * v * v.transpose();
-  }
+  const Eigen::Matrix<double, 12, 9> W = modes_in_x(es, B);
+  const Matrix12d H = W * mu.asDiagonal() * W.transpose();
   return (H + H.transpose()) * 0.5;  // exactly symmetric: K's blocks (p, q) and (q, p) stay transposes
+}
+
+Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
+                                                const Eigen::Matrix<double, 4, 3>& B) {
+  return modes_in_x(es, B).array().square().matrix() * mu;
 }
 
 Matrix9d tet_modes_to_F(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu) {
@@ -162,9 +183,35 @@ Matrix12d tet_geometric_stiffness(const Eigen::Vector3d& x0, const Eigen::Vector
   return tet_modes_to_x(es, mu, tet_shape_gradients(Dm_inv));
 }
 
-Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
-                             const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj) {
+Eigen::Matrix<double, 12, 1> tet_geometric_stiffness_diagonal(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                                                              const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
+                                                              const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj) {
   const ArapEigensystem es = arap_eigensystem(tet_deformation_gradient(x0, x1, x2, x3, Dm_inv));
+  Eigen::Matrix<double, 9, 1> mu;
+  for (int k = 0; k < 9; ++k) mu[k] = project_eigenvalue(-lambda * es.c[k], proj);
+  return tet_modes_diagonal(es, mu, tet_shape_gradients(Dm_inv));
+}
+
+Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
+                             const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj,
+                             double* C, std::array<Eigen::Vector3d, 4>* grad) {
+  const Eigen::Matrix3d F = tet_deformation_gradient(x0, x1, x2, x3, Dm_inv);
+  Eigen::Matrix3d U, V;
+  Eigen::Vector3d s;
+  svd_rv(F, U, s, V);
+  const ArapEigensystem es = arap_eigensystem(F, U, s, V);
+  if (C) *C = es.C;
+  if (grad) {  // tet_arap_constraint's formula, from the same SVD
+    if (es.C < tet_rest_epsilon) {
+      for (auto& g : *grad) g.setZero();
+    } else {
+      const Eigen::Matrix3d G = ((F - U * V.transpose()) / es.C) * Dm_inv.transpose();
+      (*grad)[1] = G.col(0);
+      (*grad)[2] = G.col(1);
+      (*grad)[3] = G.col(2);
+      (*grad)[0] = -(G.col(0) + G.col(1) + G.col(2));
+    }
+  }
   Eigen::Matrix<double, 9, 1> mu;
   for (int k = 0; k < 9; ++k) mu[k] = project_eigenvalue(es.psi[k] / alpha_tilde, proj);
   return tet_modes_to_x(es, mu, tet_shape_gradients(Dm_inv));

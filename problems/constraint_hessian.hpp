@@ -56,8 +56,10 @@ Matrix6d distance_hessian(const Eigen::Vector3d& p, const Eigen::Vector3d& q);
 Matrix6d distance_geometric_stiffness(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double lambda, Projection proj);
 // H = (∇C∇Cᵀ + C∇²C)/α̃: B = (nnᵀ + π(C/l)(I − nnᵀ))/α̃ (the stretch eigenvalue 2/α̃ is never
 // negative; the transverse one 2C/(l α̃) is negative under compression). 0 at l = 0.
+// C and ∇C (distance_constraint's) come out too where asked.
 Matrix6d distance_energy_hessian(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double rest, double alpha_tilde,
-                                 Projection proj);
+                                 Projection proj, double* C = nullptr, Eigen::Vector3d* grad_p = nullptr,
+                                 Eigen::Vector3d* grad_q = nullptr);
 
 // ---- Tet ARAP, C = ‖F − R‖_F (problems/constraints.hpp), Ψ = ½C² = ½‖F − R‖².
 // With F = UΣVᵀ (rotation-variant: σ₁ ≥ σ₂ ≥ |σ₃|, so every σᵢ + σⱼ ≥ 0), ∇²_F Ψ has the
@@ -83,15 +85,22 @@ struct ArapEigensystem {
   double C = 0;
 };
 ArapEigensystem arap_eigensystem(const Eigen::Matrix3d& F);
+// The same from F's rotation-variant SVD (svd_rv) already at hand.
+ArapEigensystem arap_eigensystem(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& sigma,
+                                 const Eigen::Matrix3d& V);
 
 // F = Ds·Dm⁻¹ of a tet, and ∂F/∂x: ∂F_ik/∂x_{a,i'} = δ_{ii'} B(a, k), B's rows 1–3 those of Dm⁻¹,
 // row 0 minus their sum.
 Eigen::Matrix3d tet_deformation_gradient(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                                          const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv);
 Eigen::Matrix<double, 4, 3> tet_shape_gradients(const Eigen::Matrix3d& Dm_inv);
-// Σ_k μ_k (D q_k)(D q_k)ᵀ over the eigensystem's modes: a 9×9 F-space matrix mapped to x.
+// Σ_k μ_k (D q_k)(D q_k)ᵀ over the eigensystem's modes: a 9×9 F-space matrix mapped to x, made
+// exactly symmetric.
 Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
                          const Eigen::Matrix<double, 4, 3>& B);
+// Its diagonal alone (what §1.4's diagonal needs), without the 12×12 matrix.
+Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
+                                                const Eigen::Matrix<double, 4, 3>& B);
 // Σ_k μ_k vec(Q_k) vec(Q_k)ᵀ: the same in F-space.
 Matrix9d tet_modes_to_F(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu);
 
@@ -102,7 +111,13 @@ Matrix12d tet_arap_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
 // (eigenvalues −λc and ψ/α̃ through π), then mapped to x (Dᵀ(·)D keeps PSD).
 Matrix12d tet_geometric_stiffness(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                                   const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj);
+// tet_energy_hessian also gives C and ∇C (tet_arap_constraint's, from the same SVD) where asked.
+// The diagonal of tet_geometric_stiffness.
+Eigen::Matrix<double, 12, 1> tet_geometric_stiffness_diagonal(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                                                              const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
+                                                              const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj);
 Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
-                             const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj);
+                             const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj,
+                             double* C = nullptr, std::array<Eigen::Vector3d, 4>* grad = nullptr);
 
 }  // namespace xb

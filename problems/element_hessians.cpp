@@ -22,6 +22,12 @@ ElementHessians::ElementHessians(const Problem& prob) : prob_(prob) {
   }
 }
 
+void ElementMatrices::resize(int num_distance, int num_tets) {
+  nd_ = num_distance;
+  nt_ = num_tets;
+  values_.resize(36L * nd_ + 144L * nt_);
+}
+
 namespace {
 
 // Constraint j's block by `distance(p, q, j)` or `tet(x0, x1, x2, x3, Dm_inv, t)`, padded to 12×12.
@@ -51,28 +57,45 @@ Matrix12d geometric_stiffness_block(const Problem& prob, const Eigen::Matrix3Xd&
 
 void ElementHessians::fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda, Projection proj) {
   const int m = prob_.num_constraints();
-  blocks_.resize(m);
+  blocks_.resize(static_cast<int>(prob_.distance.size()), static_cast<int>(prob_.tets.size()));
+  const int nd = static_cast<int>(prob_.distance.size());
 #pragma omp parallel for schedule(static)
-  for (int j = 0; j < m; ++j) blocks_[j] = geometric_stiffness_block(prob_, x, j, lambda[j], proj);
+  for (int j = 0; j < m; ++j) {
+    const Matrix12d G = geometric_stiffness_block(prob_, x, j, lambda[j], proj);
+    if (j < nd)
+      blocks_.matrix(j) = G.topLeftCorner<6, 6>();
+    else
+      blocks_.matrix(j) = G;
+  }
 }
 
-void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj) {
-  const int m = prob_.num_constraints();
+void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                                         ConstraintState* state) {
+  const int m = prob_.num_constraints(), nd = static_cast<int>(prob_.distance.size());
   for (int j = 0; j < m; ++j)
     if (!(alpha_tilde[j] > 0))
       throw Error("energy Hessian: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
                   " (E = sum C^2/(2 alpha) needs every alpha~ > 0)");
-  blocks_.resize(m);
+  blocks_.resize(nd, static_cast<int>(prob_.tets.size()));
+  if (state) {
+    state->C.resize(m);
+    state->grad.resize(m);
+  }
 #pragma omp parallel for schedule(static)
-  for (int j = 0; j < m; ++j)
-    blocks_[j] = element(
-        prob_, x, j,
-        [&](const auto& p, const auto& q, int i) {
-          return distance_energy_hessian(p, q, prob_.distance.rest_length[i], alpha_tilde[j], proj);
-        },
-        [&](const auto& x0, const auto& x1, const auto& x2, const auto& x3, const auto& Dm_inv, int) {
-          return tet_energy_hessian(x0, x1, x2, x3, Dm_inv, alpha_tilde[j], proj);
-        });
+  for (int j = 0; j < m; ++j) {
+    double* C = state ? &state->C[j] : nullptr;
+    std::array<Eigen::Vector3d, 4>* g = state ? &state->grad[j] : nullptr;
+    if (j < nd) {
+      const auto& e = prob_.distance.idx[j];
+      blocks_.matrix(j) = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j],
+                                                        alpha_tilde[j], proj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr);
+      if (g) (*g)[2].setZero(), (*g)[3].setZero();
+    } else {
+      const auto& e = prob_.tets.idx[j - nd];
+      blocks_.matrix(j) = tet_energy_hessian(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
+                                      alpha_tilde[j], proj, C, g);
+    }
+  }
 }
 
 void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda,
@@ -81,8 +104,16 @@ void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, co
   diag_.resize(m);
 #pragma omp parallel for schedule(static)
   for (int j = 0; j < m; ++j) {
-    const Matrix12d G = geometric_stiffness_block(prob_, x, j, lambda[j], proj);
-    for (int s = 0; s < 4; ++s) diag_[j][s] = G.diagonal().segment<3>(3 * s);
+    const int nd = static_cast<int>(prob_.distance.size());
+    Eigen::Matrix<double, 12, 1> d;
+    if (j < nd) {
+      d = geometric_stiffness_block(prob_, x, j, lambda[j], proj).diagonal();
+    } else {
+      const auto& e = prob_.tets.idx[j - nd];
+      d = tet_geometric_stiffness_diagonal(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
+                                           lambda[j], proj);
+    }
+    for (int s = 0; s < 4; ++s) diag_[j][s] = d.segment<3>(3 * s);
   }
   kd.resize(3, n);
   const Eigen::VectorXd& w = prob_.particles.w;

@@ -23,19 +23,45 @@
 
 namespace xb {
 
-// One 12×12 block per constraint in its particle order (distance constraints use the top-left
-// 6×6, the rest stays zero). Blocks of pinned particles are kept; the assembly skips them.
-using ElementMatrices = std::vector<Matrix12d>;
+// One symmetric 3k × 3k matrix per constraint in its particle order (k = 2 for a distance, 4 for a
+// tet; distances first, as Problem numbers them), stored flat and column-major: 36 + 144 doubles,
+// not a 12×12 for every edge of a cloth. Blocks of pinned particles are kept; the assembly skips them.
+class ElementMatrices {
+ public:
+  // Sizes the storage (no allocation when the sizes are unchanged).
+  void resize(int num_distance, int num_tets);
+  int size() const { return nd_ + nt_; }
+  int slots(int j) const { return j < nd_ ? 2 : 4; }
+  Eigen::Map<Eigen::MatrixXd> matrix(int j) { return Eigen::Map<Eigen::MatrixXd>(data(j), 3 * slots(j), 3 * slots(j)); }
+  Eigen::Map<const Eigen::MatrixXd> matrix(int j) const {
+    return Eigen::Map<const Eigen::MatrixXd>(data(j), 3 * slots(j), 3 * slots(j));
+  }
+  // Block (a, b) of constraint j: the 3×3 coupling of its particles a and b.
+  Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>> block(int j, int a, int b) const {
+    const int n = 3 * slots(j);
+    return Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<>>(data(j) + 3L * b * n + 3 * a, Eigen::OuterStride<>(n));
+  }
+  const double* data(int j) const { return values_.data() + offset(j); }
+  double* data(int j) { return values_.data() + offset(j); }
+
+ private:
+  long offset(int j) const { return j < nd_ ? 36L * j : 36L * nd_ + 144L * (j - nd_); }
+  int nd_ = 0, nt_ = 0;
+  std::vector<double> values_;
+};
 
 class ElementHessians {
  public:
   // Keeps a reference to prob (its constraints and masses; positions are passed in).
   explicit ElementHessians(const Problem& prob);
 
-  // blocks()[j] = π(G_j) = π(−λ_j∇²C_j(x)).
+  // blocks().matrix(j) = π(G_j) = π(−λ_j∇²C_j(x)).
   void fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda, Projection proj);
-  // blocks()[j] = π(H_j) = π((∇C_j∇C_jᵀ + C_j∇²C_j)/α̃_j) at x. Throws xb::Error if some α̃ ≤ 0.
-  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj);
+  // blocks().matrix(j) = π(H_j) = π((∇C_j∇C_jᵀ + C_j∇²C_j)/α̃_j) at x. Throws xb::Error if some α̃ ≤ 0.
+  // With `state`, also evaluate_constraints(prob, x, *state) from the same SVDs (identical values),
+  // so a Newton iteration needs one pass over the constraints, not two.
+  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                           ConstraintState* state = nullptr);
   const ElementMatrices& blocks() const { return blocks_; }
 
   // §1.4's diagonal: kd(:, p) = max(0, the diagonal of Σ_j π(G_j)'s (p, p) block) per dof, for every

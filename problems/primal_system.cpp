@@ -188,13 +188,13 @@ void PrimalSystem::fill_with_diagonal(const Gradients& grad, const Eigen::Vector
 }
 
 void PrimalSystem::fill_with_blocks(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const ElementMatrices& G) {
-  if (static_cast<int>(G.size()) != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
+  if (G.size() != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
   set_inverse_alpha(alpha_tilde);
   fill_values<true, true>(&grad, nullptr, &G);
 }
 
 void PrimalSystem::fill_energy_hessian(const ElementMatrices& H) {
-  if (static_cast<int>(H.size()) != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
+  if (H.size() != graph_.num_constraints()) throw Error("primal system: not one block per constraint");
   fill_values<false, true>(nullptr, nullptr, &H);
 }
 
@@ -205,12 +205,20 @@ void PrimalSystem::fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd
   constexpr int kAhead = 2;
 #pragma omp parallel for schedule(static)
   for (int p = 0; p < nb; ++p) {
-    // The gradients of a later node row's constraints, whose loads would otherwise stall.
-    if (kGaussNewton && p + kAhead < nb)
+    // The gradients (and element columns) of a later node row's constraints, whose loads would
+    // otherwise stall.
+    if (p + kAhead < nb)
       for (int k = inc_start_[p + kAhead]; k < inc_start_[p + kAhead + 1]; ++k) {
-        const char* g = reinterpret_cast<const char*>((*grad)[inc_[k] >> 2].data());
-        __builtin_prefetch(g);
-        __builtin_prefetch(g + 64);
+        if constexpr (kGaussNewton) {
+          const char* g = reinterpret_cast<const char*>((*grad)[inc_[k] >> 2].data());
+          __builtin_prefetch(g);
+          __builtin_prefetch(g + 64);
+        }
+        if constexpr (kBlocks) {
+          const int j = inc_[k] >> 2, n = 3 * blocks->slots(j);  // slot's 3 columns: 3n doubles
+          const char* e = reinterpret_cast<const char*>(blocks->data(j) + 3 * n * (inc_[k] & 3));
+          for (int c = 0; c < 24 * n; c += 64) __builtin_prefetch(e + c);
+        }
       }
     const int nbp = block_start_[p + 1] - block_start_[p];
     for (int k = 0; k < nbp; ++k) {
@@ -220,7 +228,9 @@ void PrimalSystem::fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd
         const std::int64_t term = terms_[t];
         const int j = static_cast<int>(term >> 4), sp = (term >> 2) & 3, sq = term & 3;
         if constexpr (kGaussNewton) B.noalias() += ((*grad)[j][sp] * (*grad)[j][sq].transpose()) * inv_alpha_[j];
-        if constexpr (kBlocks) B += (*blocks)[j].template block<3, 3>(3 * sp, 3 * sq);
+        // Block (sp, sq) read as the transpose of (sq, sp): a node row then reads its slot's
+        // 3 contiguous columns of each element (the blocks are exactly symmetric).
+        if constexpr (kBlocks) B += blocks->block(j, sq, sp).transpose();
       }
       if (block_col_[blk] == p) {
         B.diagonal().array() += 1.0 / graph_.w[free_[p]];

@@ -62,7 +62,8 @@ class PrimalSystem {
   // The top-left block M̃ in place of M (problems/element_hessians.hpp; the pattern is the same):
   // K = M + K̃_d + Jᵀα̃⁻¹J, kd per particle (3 × all particles, as ElementHessians fills it).
   void fill_with_diagonal(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& kd);
-  // K = M + Σ_j G_j + Jᵀα̃⁻¹J, G_j the (projected) geometric stiffness blocks.
+  // K = M + Σ_j G_j + Jᵀα̃⁻¹J, G_j the (projected) geometric stiffness blocks, each exactly
+  // symmetric (as ElementHessians makes them: K's blocks (p, q) and (q, p) are then exact transposes).
   void fill_with_blocks(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const ElementMatrices& G);
   // Newton on E: K = M + Σ_j H_j = Δt²∇²E, H_j the (projected) element Hessians of ½C_j²/α̃_j,
   // which hold the Gauss–Newton part already (no Jᵀα̃⁻¹J is added).

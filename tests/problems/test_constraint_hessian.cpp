@@ -184,6 +184,41 @@ TEST(TetArapHessian, ClosedFormEigensystemOfPsi) {
   }
 }
 
+// The sign convention: G = −λ∇²C unprojected, and at λ = −C/α̃ the Gauss–Newton part plus G is
+// the Newton block, ∇C∇Cᵀ/α̃ + G = (∇C∇Cᵀ + C∇²C)/α̃ = H.
+TEST(GeometricStiffness, SignConventionAndNewtonSplit) {
+  const double at = 0.05;
+  for (const auto& sigma : cases) {
+    const Tet t = make_tet(sigma);
+    double C;
+    const Vec12 g = tet_gradient(pack(t), t.Dm_inv, &C);
+    const double lambda = -C / at;
+    const Matrix12d G = tet_geometric_stiffness(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, lambda, Projection::none);
+    const Matrix12d hess = tet_arap_hessian(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv);
+    EXPECT_LE(max_abs(G + lambda * hess), 1e-12 * max_abs(G)) << sigma.transpose();
+    const Matrix12d H = tet_energy_hessian(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, at, Projection::none);
+    EXPECT_LE(max_abs(g * g.transpose() / at + G - H), 1e-12 * max_abs(H)) << sigma.transpose();
+    for (Projection proj : {Projection::none, Projection::clamp}) {  // the diagonal alone is G's
+      const Matrix12d Gp = tet_geometric_stiffness(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, lambda, proj);
+      EXPECT_LE(max_abs(tet_geometric_stiffness_diagonal(t.x[0], t.x[1], t.x[2], t.x[3], t.Dm_inv, lambda, proj) -
+                        Gp.diagonal()),
+                1e-12 * max_abs(G));
+    }
+  }
+  for (double stretch : {0.5, 1.5}) {
+    const Eigen::Vector3d p = rand3(), q = rand3();
+    const double rest = (p - q).norm() / stretch, C = (p - q).norm() - rest, lambda = -C / at;
+    const Matrix6d G = distance_geometric_stiffness(p, q, lambda, Projection::none);
+    EXPECT_LE(max_abs(G + lambda * distance_hessian(p, q)), 1e-12 * max_abs(G));
+    Eigen::Matrix<double, 6, 1> g;
+    g << (p - q).normalized(), (q - p).normalized();
+    EXPECT_LE(max_abs(g * g.transpose() / at + G - distance_energy_hessian(p, q, rest, at, Projection::none)), 1e-12 * max_abs(G));
+    // Stretched (λ < 0 at the solution) the geometric stiffness is PSD; compressed it is not.
+    const double min_eig = Eigen::SelfAdjointEigenSolver<Matrix6d>(G).eigenvalues().minCoeff();
+    EXPECT_TRUE(stretch > 1 ? min_eig > -1e-12 * max_abs(G) : min_eig < -0.1 * max_abs(G)) << stretch;
+  }
+}
+
 TEST(Projection, ClosedFormEqualsNumericEigenProjection) {
   for (Projection proj : {Projection::clamp, Projection::abs})
     for (const auto& sigma : cases)

@@ -66,7 +66,7 @@ Eigen::MatrixXd dense_K(const Case& c, const PrimalSystem& ps, const ElementMatr
       for (int b = 0; b < 4; ++b) {
         if (pj[a] < 0 || pj[b] < 0 || dof[pj[a]] < 0 || dof[pj[b]] < 0) continue;
         auto blk = K.block<3, 3>(dof[pj[a]], dof[pj[b]]);
-        if (blocks) blk += (*blocks)[j].block<3, 3>(3 * a, 3 * b);
+        if (blocks) blk += blocks->matrix(j).block<3, 3>(3 * a, 3 * b);
         if (gauss_newton) blk += c.s.grad[j][a] * c.s.grad[j][b].transpose() / c.alpha_tilde[j];
       }
   }
@@ -108,11 +108,11 @@ TEST(ElementHessians, FullGeometricStiffnessInK) {
       const auto& x = c.prob.particles.x;
       if (nd < c.prob.num_constraints()) {  // the first tet
         const auto e = c.prob.constraint_particles(nd);
-        EXPECT_EQ(eh.blocks()[nd], tet_geometric_stiffness(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]),
+        EXPECT_EQ(Matrix12d(eh.blocks().matrix(nd)), tet_geometric_stiffness(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]),
                                                            c.prob.tets.Dm_inv[0], c.lambda[nd], proj));
       } else {  // the first distance
         const auto e = c.prob.constraint_particles(0);
-        const Matrix6d D = eh.blocks()[0].topLeftCorner<6, 6>();
+        const Matrix6d D = eh.blocks().matrix(0);
         EXPECT_EQ(D, distance_geometric_stiffness(x.col(e[0]), x.col(e[1]), c.lambda[0], proj));
       }
       ps.fill_with_blocks(c.s.grad, c.alpha_tilde, eh.blocks());
@@ -134,7 +134,12 @@ TEST(ElementHessians, NewtonMatrixAndGradientMatchFiniteDifferences) {
     ElementHessians eh(c.prob);
     Eigen::Matrix3Xd x = c.prob.particles.x;
     const Eigen::Matrix3Xd x_pred = x + 0.01 * Eigen::Matrix3Xd::Random(3, x.cols());
-    eh.fill_energy_hessian(x, c.alpha_tilde, Projection::none);
+    ConstraintState at_x, ref;
+    eh.fill_energy_hessian(x, c.alpha_tilde, Projection::none, &at_x);
+    evaluate_constraints(c.prob, x, ref);  // the state from the same pass is evaluate_constraints'
+    EXPECT_EQ(at_x.C, ref.C);
+    for (int j = 0; j < c.prob.num_constraints(); ++j)
+      for (int a = 0; a < 4; ++a) EXPECT_EQ(at_x.grad[j][a], ref.grad[j][a]) << j << " " << a;
     ps.fill_energy_hessian(eh.blocks());
     const Eigen::MatrixXd K(ps.K());
     EXPECT_LE(rel(K, dense_K(c, ps, &eh.blocks(), false)), 1e-13);

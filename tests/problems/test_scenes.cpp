@@ -42,6 +42,8 @@ class MpiEnv : public ::testing::Environment {
 [[maybe_unused]] ::testing::Environment* const mpi_env = ::testing::AddGlobalTestEnvironment(new MpiEnv);
 
 const std::set<std::string> paper_scenes = {"squash", "twist_bar", "cantilever", "cloth_hang", "ball_drop", "mass_chain"};
+// Tournier et al. 2015's heavy-end-mass chains (issue 30).
+const std::set<std::string> chain_scenes = {"heavy_rope", "pendulum"};
 
 Params tiny(const std::string& scene, std::vector<std::string> sets = {}) {
   // Small enough for every method in well under a second per run.
@@ -144,6 +146,40 @@ TEST(Scenes, MassChainGradesMassesUpToTheRatio) {
   }
 }
 
+// The end-mass chains: pinned at the origin, straight at `angle` off the downward vertical, links
+// of size/resolution, only the last particle heavy (mass_ratio, the variants included).
+TEST(Scenes, EndMassChainsHangAHeavyLastParticle) {
+  const auto names = scene_names();
+  for (const auto& s : chain_scenes) {
+    EXPECT_NE(std::find(names.begin(), names.end(), s), names.end()) << s;
+    const Params p = resolve_params(s, {});
+    EXPECT_NEAR(p.dt, 1.0 / 60, 1e-15) << s;
+    EXPECT_EQ(p.mass_ratio, 100.0) << s;
+    const Problem prob = build_problem(p);
+    const int n = prob.particles.size();
+    ASSERT_EQ(n, p.resolution + 1) << s;
+    EXPECT_EQ(prob.particles.w[0], 0.0);
+    EXPECT_EQ(prob.particles.x.col(0), Eigen::Vector3d::Zero());
+    const Eigen::Vector3d dir(std::sin(p.angle), -std::cos(p.angle), 0);
+    for (int i = 1; i < n; ++i) {
+      EXPECT_NEAR((prob.particles.x.col(i) - i * p.size / p.resolution * dir).norm(), 0, 1e-12) << s << " " << i;
+      EXPECT_EQ(1 / prob.particles.w[i], i + 1 < n ? p.particle_mass : 100 * p.particle_mass) << s << " " << i;
+      EXPECT_EQ(prob.distance.compliance[i - 1], p.compliance);
+    }
+    EXPECT_GT(std::abs(std::sin(p.angle)), 0.25) << s << ": released off the vertical, so it swings";
+    const Problem heavy = build_problem(resolve_params(s, {"variant=mass_ratio_1e4"}));
+    EXPECT_EQ(1 / heavy.particles.w[n - 1], 1e4 * p.particle_mass);
+    EXPECT_EQ(1 / heavy.particles.w[n - 2], p.particle_mass);  // no i² grading
+    for (double a : build_problem(resolve_params(s, {"variant=mu1e12"})).distance.compliance) EXPECT_EQ(a, 1e-12);
+    for (double a : build_problem(resolve_params(s, {"variant=rigid"})).distance.compliance) EXPECT_EQ(a, 0.0);
+    EXPECT_NEAR(resolve_params(s, {"variant=dt_30hz"}).dt, 1.0 / 30, 1e-15);
+  }
+  const Problem nd = build_problem(resolve_params("heavy_rope", {"variant=near_degenerate"}));
+  EXPECT_NEAR(nd.distance.rest_length[5], 1e-3 * nd.distance.rest_length[4], 1e-15);
+  EXPECT_THROW(build_problem(resolve_params("pendulum", {"variant=near_degenerate"})), Error);  // 5 links: none to shorten
+  EXPECT_THROW(build_problem(resolve_params("mass_chain", {"angle=0.3"})), Error);
+}
+
 TEST(Variants, SetImpliedKeysAndActOnTheProblem) {
   EXPECT_NEAR(resolve_params("cloth_hang", {"variant=dt_30hz"}).dt, 1.0 / 30, 1e-15);
   EXPECT_EQ(resolve_params("squash", {"variant=mu1e12"}).stiffness, 1e12);
@@ -231,7 +267,9 @@ TEST(Stability, InvertedTetsAreLoggedPerSubstepForTetScenesOnly) {
 // exception; a failure status always carries a message.
 TEST(Scenes, EverySceneRunsWithEveryMethod) {
   const std::set<std::string> honest = {"ok", "max_iterations", "diverged", "nan", "breakdown"};
-  for (const auto& s : paper_scenes) {
+  std::set<std::string> scenes = paper_scenes;
+  scenes.insert(chain_scenes.begin(), chain_scenes.end());
+  for (const auto& s : scenes) {
     const Params p = tiny(s);
     const Problem prob = build_problem(p);
     for (const auto& m : methods()) {
