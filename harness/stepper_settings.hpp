@@ -17,12 +17,33 @@ struct StepperSettings {
   // quantity the authors' code logs, harness/io/run_result.hpp: IterationLog::authors_dual_residual).
   std::string residual_metric = "true";
   // Global step: fixed (x += ω M⁻¹∇CᵀΔλ, λ += Δλ) | line_search (the authors' backtracking on the
-  // dual residual, harness/sim/line_search.hpp; ω unused).
+  // dual residual, harness/sim/line_search.hpp; ω unused) | newton (Newton's method on the incremental
+  // potential E(x), harness/sim/newton.hpp: λ = −C(x)/α̃ at every iterate, an Armijo backtracking
+  // line search on E, and rtol/atol read ‖∇E‖ instead of the dual residual; needs every α̃ > 0 and
+  // primal_residual = keep).
   std::string step = "fixed";
   int threads = 0;  // OpenMP threads, 0 = OpenMP's default
   // The form of every global method's linear step: dual (A Δλ = b) | primal (K Δx = Jᵀα̃⁻¹b,
   // then Δλ = α̃⁻¹(b − JΔx); needs every α̃ > 0) | auto (primal when every α̃ > 0, else dual).
   std::string form = "auto";
+  // XPBD's two simplifications of the Newton step on the KKT system (Eq. 6 of the supplemental), as
+  // switches (docs/newton.md). geometric_stiffness: the top-left block M̃ = M − Σ λ_j ∇²C_j is M (none,
+  // XPBD's), M + K̃_d (diagonal: per particle the non-negative diagonal of that sum) or the whole
+  // sum, each constraint's part made positive semi-definite (full; primal form only).
+  std::string geometric_stiffness = "none";
+  // primal_residual: g = M(x − x̃) − ∇Cᵀλ left out of the step's right-hand side (zero, XPBD's) or
+  // kept (keep): dual (∇C M̃⁻¹∇Cᵀ + α̃)Δλ = −h + ∇C M̃⁻¹g, Δx = M̃⁻¹(∇CᵀΔλ − g); primal K Δx = Jᵀα̃⁻¹b − g.
+  std::string primal_residual = "zero";
+  // How each element's part of the geometric stiffness is made PSD (full): clamp (negative
+  // eigenvalues to 0) | abs (to their absolute value) | adaptive (step = newton: clamp until ‖∇E‖ falls
+  // below exact_hessian_below of its first value, then the exact Hessian while it gives a descent
+  // direction, clamp again for a step where it does not).
+  std::string hessian_projection = "clamp";
+  double exact_hessian_below = 1e-2;
+  // The reference solution of --reference (harness/sim/reference.hpp): newton (Newton on E, the
+  // backward-Euler solution; every α̃ > 0) | xpbd (XPBD's fixed point by CHOLMOD) | auto (newton
+  // where every α̃ > 0, else xpbd).
+  std::string reference_method = "auto";
 };
 
 const SettingTable<StepperSettings>& stepper_settings();

@@ -89,6 +89,23 @@ void add_provenance(RunRecord& r, const Params& p) {
   r.attrs["created"] = now_iso();
 }
 
+namespace {
+// The Newton residual's last entry, and where every α̃ > 0 what the reference's ‖∇E‖ reached
+// (issue 30's records; results/README.md).
+void add_newton_attributes(RunRecord& r, const IterationLog& L) {
+  if (!L.newton_residual.empty()) {
+    r.attrs["final_newton_residual"] = L.newton_residual.back();
+    r.attrs["final_relative_newton_residual"] = L.relative_newton_residual.back();
+  }
+  if (!L.reference_relative_energy_gradient.empty()) {
+    double worst = 0;
+    for (double v : L.reference_relative_energy_gradient) worst = std::max(worst, v);
+    r.attrs["reference_energy_gradient"] = worst;
+    r.datasets["reference/relative_energy_gradient"] = L.reference_relative_energy_gradient;
+  }
+}
+}  // namespace
+
 RunRecord make_simulation_record(const std::string& name, const Params& p, const std::string& method,
                                  const RunResult& res) {
   RunRecord r;
@@ -103,6 +120,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.attrs["message"] = res.message;
   r.attrs["outer_iterations"] = res.outer_iterations;
   r.attrs["final_dual_residual"] = res.final_dual_residual;
+  add_newton_attributes(r, res.log);
   r.attrs["relative_dual_residual"] = res.relative_dual_residual;
   r.attrs["wall_time"] = res.wall_time;
   r.attrs["substeps_total"] = static_cast<long long>(res.substeps_total);
@@ -118,12 +136,16 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.datasets["authors_dual_residual"] = L.authors_dual_residual;
   r.datasets["authors_relative_dual_residual"] = L.authors_relative_dual_residual;
   r.datasets["primal_residual"] = L.primal_residual;
+  r.datasets["newton_residual"] = L.newton_residual;
+  r.datasets["relative_newton_residual"] = L.relative_newton_residual;
   r.datasets["energy"] = L.energy;
   r.datasets["wall_time"] = L.wall_time;
   r.datasets["step_time"] = L.step_time;
   const MethodInfo* m = find_method(method);
   if (m && !m->local) {
     r.datasets["step_length"] = L.step_length;
+    r.datasets["line_search_trials"] = L.line_search_trials;
+    r.datasets["exact_hessian"] = L.exact_hessian;
     r.datasets["fill_time"] = L.fill_time;
     r.datasets["linear_iterations"] = L.linear_iterations;
     r.datasets["linear_setup_time"] = L.linear_setup_time;

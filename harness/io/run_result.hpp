@@ -23,7 +23,11 @@ struct IterationLog {
   //  - global methods: ‖C(x_{k−1}) + α̃λ_k‖, C of the state before step k, λ after it.
   // Equal to dual_residual at iteration 0. The relative one is over that same iteration-0 value.
   std::vector<double> authors_dual_residual, authors_relative_dual_residual;
-  std::vector<double> primal_residual;         // ‖M(x − x̃) − ∇Cᵀλ‖₂ over free particles
+  std::vector<double> primal_residual;         // ‖g‖₂, g = M(x − x̃) − ∇Cᵀλ over free particles
+  // Chen et al. 2023's Newton residual √(‖g‖² + ‖h‖²), h = C + α̃λ, and it over ‖Jᵀα̃⁻¹C(x̃)‖ = h²‖∇E(x̃)‖
+  // (the same scale for every method; the Newton residual at x̃ where some α̃ = 0). Under step =
+  // newton λ = −α̃⁻¹C, so h = 0 and newton_residual = h²‖∇E‖.
+  std::vector<double> newton_residual, relative_newton_residual;
   std::vector<double> energy;                  // ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) (α > 0)
   std::vector<double> wall_time;               // s since the substep began
   std::vector<double> step_time;               // s in the method step (assembly + setup + solve, or sweep)
@@ -33,6 +37,9 @@ struct IterationLog {
   // Global methods: the step length of the step that led here (ω for step = fixed, the line
   // search's t for step = line_search); 0 at iteration 0 and for local methods.
   std::vector<double> step_length;
+  // The line search's trials in the step that led here (step = line_search | newton; else 0), and
+  // whether that step used the exact element Hessians (step = newton, xpbd.hessian_projection = adaptive).
+  std::vector<long long> line_search_trials, exact_hessian;
   std::vector<long long> linear_iterations;
   std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
   std::vector<double> linear_tolerance;  // the relative tolerance that step was given (linear.forcing)
@@ -46,6 +53,7 @@ struct IterationLog {
   // what the reference reached.
   std::vector<double> position_error;
   std::vector<double> reference_relative_dual_residual;
+  std::vector<double> reference_relative_energy_gradient;  // ‖∇E‖/‖∇E(x̃)‖ of the reference (every α̃ > 0)
   std::vector<long long> reference_iterations;
   std::vector<std::string> reference_status;
 };

@@ -30,17 +30,38 @@ void PrimalSolve::set_tolerance(double tol) {
   solver_->set_tolerance(tol);
 }
 
+const Vector& PrimalSolve::inverse_mass() {
+  if (top_.inv_mass) return *top_.inv_mass;
+  if (minv_.size() == 0) {
+    const auto& free = sys_.free_particles();
+    minv_.resize(3 * static_cast<long>(free.size()));
+    for (size_t i = 0; i < free.size(); ++i) minv_.segment<3>(3 * i).setConstant(sys_.graph().w[free[i]]);
+  }
+  return minv_;
+}
+
+// bnorm_ is ‖f‖ for a full M̃ (K's own residual), else the dual right-hand side's norm.
 double PrimalSolve::dual_relative(const Vector& r_K) {
-  sys_.dual_residual(*grad_, r_K, work_);
+  if (top_.full()) return bnorm_ > 0 ? norm2(r_K) / bnorm_ : norm2(r_K);
+  if (top_.inv_mass) {
+    scaled_ = r_K.cwiseProduct(*top_.inv_mass);
+    sys_.apply_J(*grad_, scaled_, work_);  // −J M̃⁻¹ r_K (the sign does not change the norm)
+  } else {
+    sys_.dual_residual(*grad_, r_K, work_);
+  }
   return bnorm_ > 0 ? norm2(work_) / bnorm_ : norm2(work_);
 }
 
 void PrimalSolve::setup(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& x,
-                        SetupKind kind, SetupContext ctx) {
+                        SetupKind kind, SetupContext ctx, const TopLeftBlock& top) {
   Timer t;
   grad_ = &grad;
   alpha_tilde_ = &alpha_tilde;
-  sys_.fill(grad, alpha_tilde);
+  top_ = top;
+  if (top.fill)
+    top.fill(sys_);
+  else
+    sys_.fill(grad, alpha_tilde);
   fill_time_ = t.seconds();
   const Eigen::MatrixXd B = sys_.rigid_modes(x);
   ctx.block_size = 3;
@@ -49,13 +70,25 @@ void PrimalSolve::setup(const Gradients& grad, const Eigen::VectorXd& alpha_tild
   setup_time_ = t.seconds();
 }
 
-LinearStats PrimalSolve::solve(const Vector& b, Vector& dlambda) {
+LinearStats PrimalSolve::solve(const Vector& b, Vector& dlambda, const Vector* g, Vector* dx_out) {
   if (!grad_) throw Error("primal solve: solve() before setup()");
   Timer t;
-  bnorm_ = norm2(b);
   const SparseMatrix& K = sys_.K();
   Vector f, r, dx = Vector::Zero(K.rows()), delta;
   sys_.rhs(*grad_, *alpha_tilde_, b, f);
+  bnorm_ = norm2(b);
+  if (g) {
+    f -= *g;
+    if (top_.full()) {
+      bnorm_ = norm2(f);
+    } else {  // the dual right-hand side b + J M̃⁻¹g
+      scaled_ = g->cwiseProduct(inverse_mass());
+      sys_.apply_J(*grad_, scaled_, work_);
+      bnorm_ = norm2(b + work_);
+    }
+  } else if (top_.full()) {
+    bnorm_ = norm2(f);
+  }
   r = f;
   LinearStats total;
   total.residual_history.push_back(bnorm_);
@@ -98,6 +131,7 @@ LinearStats PrimalSolve::solve(const Vector& b, Vector& dlambda) {
   }
   if (refines) solver_->set_tolerance(tol_);
   sys_.recover(*grad_, *alpha_tilde_, b, dx, dlambda);
+  if (dx_out) *dx_out = std::move(dx);
   total.setup_time = setup_time_;
   setup_time_ = 0;
   total.solve_time = t.seconds();

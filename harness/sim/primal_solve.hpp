@@ -9,9 +9,21 @@
 #include "../../solvers/linear_solver.hpp"
 #include "../../solvers/solver_settings.hpp"
 
+#include <functional>
 #include <memory>
 
 namespace xb {
+
+// The top-left block M̃ of the step when it is not M (xpbd.geometric_stiffness, docs/newton.md):
+// `fill` fills K in place of K = M + Jᵀα̃⁻¹J (the same pattern); a diagonal M̃ gives its inverse per
+// free DOF (3 per free particle), so that the dual residual stays −J M̃⁻¹ r_K; a full M̃ has no
+// cheap inverse and no dual system: the solve is judged by K's own relative residual ‖r_K‖/‖f‖,
+// which for Newton on E is the inexact-Newton test ‖∇²E Δx + ∇E‖ ≤ η‖∇E‖.
+struct TopLeftBlock {
+  std::function<void(PrimalSystem&)> fill;  // empty: K = M + Jᵀα̃⁻¹J
+  const Vector* inv_mass = nullptr;         // diagonal M̃: its inverse per free DOF; null with fill: full
+  bool full() const { return fill && !inv_mass; }
+};
 
 class PrimalSolve {
  public:
@@ -20,11 +32,14 @@ class PrimalSolve {
 
   // Fills K from the gradients (kept by reference until the next setup) and sets the solver up
   // with the rigid modes at positions x. Throws xb::Error if some α̃ ≤ 0.
+  // `top`: M̃ in K's top-left block (copied; its inv_mass must outlive the solves).
   void setup(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& x, SetupKind kind,
-             SetupContext ctx);
+             SetupContext ctx, const TopLeftBlock& top = {});
   // Δλ for A Δλ = b. Statistics in dual terms: iterations summed over refinement rounds,
   // final_relative_residual = ‖b − AΔλ‖₂/‖b‖₂ (through −J M⁻¹ r_K), setup_time that of setup().
-  LinearStats solve(const Vector& b, Vector& dlambda);
+  // With g (the primal residual, one 3-block per free particle: xpbd.primal_residual = keep) the
+  // step is K Δx = Jᵀα̃⁻¹b − g, the dual system's right-hand side b + J M̃⁻¹g; dx, if given, gets Δx.
+  LinearStats solve(const Vector& b, Vector& dlambda, const Vector* g = nullptr, Vector* dx = nullptr);
   // The tolerance of the following solves (the solver's and the refinement's).
   void set_tolerance(double tol);
 
@@ -35,6 +50,7 @@ class PrimalSolve {
 
  private:
   double dual_relative(const Vector& r_K);
+  const Vector& inverse_mass();  // M̃⁻¹ per free DOF (M⁻¹ unless the top-left block gives its own)
 
   std::unique_ptr<LinearSolver> solver_;
   PrimalSystem sys_;
@@ -43,8 +59,9 @@ class PrimalSolve {
   bool solver_judges_dual_ = false;  // its Krylov loop stops on the dual residual itself
   const Gradients* grad_ = nullptr;
   const Eigen::VectorXd* alpha_tilde_ = nullptr;
+  TopLeftBlock top_;  // of the last setup
   double bnorm_ = 0, setup_time_ = 0, fill_time_ = 0;
-  Vector work_;
+  Vector work_, scaled_, minv_;
 };
 
 }  // namespace xb

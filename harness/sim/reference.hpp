@@ -1,10 +1,18 @@
-// The reference solution of one substep, for error-against-run-time plots: the substep solved
-// by the global direct method (Goldenthal's fast projection: CHOLMOD on A Δλ = −(C + α̃λ), full
-// step ω = 1, the same formulation and colliders as the stepper), started from the substep's
-// predicted state x̃ with λ = 0, iterated until the dual residual falls to 1e-10 of its first
-// value or stops improving (no 1% gain over 5 iterations), at most 100 outer iterations.
-// The best iterate (smallest dual residual) is the reference.
+// The reference solution of one substep, for error-against-run-time plots (reference.method):
+//  - newton (the default where every α̃ > 0): the solution of the time step itself, the minimiser of
+//    the incremental potential E (harness/sim/newton.hpp) — Newton's method on E with CHOLMOD on the
+//    primal form with the full geometric stiffness (xpbd.hessian_projection = adaptive: clamped
+//    until ‖∇E‖ < 1e-2 of its first value, then exact while it descends), an Armijo line search,
+//    from x̃, until ‖∇E‖ ≤ 1e-10 of its value at x̃ or the search fails (the rounding floor), at most
+//    100 iterations; the iterate with the smallest ‖∇E‖ is the reference.
+//  - xpbd (the default where some constraint is rigid, α̃ = 0): XPBD's own fixed point — CHOLMOD on
+//    A Δλ = −(C + α̃λ), full step ω = 1, from x̃ with λ = 0, until the dual residual falls to 1e-10 of
+//    its first value or stops improving (no 1% gain over 5 iterations), at most 100 iterations;
+//    the iterate with the smallest dual residual is the reference.
+// Both apply the stepper's colliders after each step.
 #pragma once
+
+#include "global_step.hpp"
 
 #include "../../problems/dual_system.hpp"
 #include "../params.hpp"
@@ -12,20 +20,19 @@
 #include "../../solvers/linear_solver.hpp"
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace xb {
 
 struct ReferenceSolution {
   Eigen::Matrix3Xd x;                  // reference positions
-  double dual_residual = 0;            // ‖C + α̃λ‖₂ of the reference
+  double dual_residual = 0;            // ‖C + α̃λ‖₂ of the reference (0 for newton: λ = −α̃⁻¹C)
   double relative_dual_residual = 0;   // over its value at x̃
+  double relative_energy_gradient = -1;  // ‖∇E‖ over its value at x̃ (−1 where some α̃ = 0)
   int iterations = 0;                  // direct solves done
   std::string status;                  // converged | stagnated | max_iterations | failed
 };
-
-// What the recorder writes as reference_method.
-std::string reference_method_description();
 
 class ReferenceSolver {
  public:
@@ -33,14 +40,26 @@ class ReferenceSolver {
   static constexpr int max_iterations = 100;
   static constexpr int stagnation_window = 5;
 
-  // `prob` must outlive the solver; only its topology, masses and colliders are used.
-  ReferenceSolver(const Problem& prob, const Params& p);
-  ReferenceSolution solve(const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& alpha_tilde);
+  // `prob` and `alpha_tilde` must outlive the solver; only the problem's topology, masses and
+  // colliders are used. Throws xb::Error for reference.method = newton with a rigid constraint.
+  ReferenceSolver(const Problem& prob, const Params& p, const Eigen::VectorXd& alpha_tilde);
+  ReferenceSolution solve(const Eigen::Matrix3Xd& x_pred);
+  // What the recorder writes as reference_method.
+  std::string description() const;
+  const std::string& method() const { return method_; }
 
  private:
+  ReferenceSolution solve_xpbd(const Eigen::Matrix3Xd& x_pred);
+  ReferenceSolution solve_newton(const Eigen::Matrix3Xd& x_pred);
+
   const Problem& prob_;
+  const Eigen::VectorXd& alpha_tilde_;
+  double h_;
+  std::string method_;
   DualSystem ds_;
-  std::unique_ptr<LinearSolver> direct_;
+  std::unique_ptr<LinearSolver> direct_;  // xpbd
+  Params newton_params_;
+  std::optional<GlobalStep> newton_;      // newton
   bool first_setup_ = true;
 };
 

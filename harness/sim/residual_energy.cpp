@@ -4,17 +4,6 @@
 
 namespace xb {
 
-double primal_residual(const Problem& prob, const DualSystem& ds, const ConstraintState& s, const Eigen::Matrix3Xd& x,
-                       const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& lambda, Eigen::Matrix3Xd& work) {
-  ds.apply_gradT(s, lambda, work);
-  const Eigen::VectorXd& w = prob.particles.w;
-  double sum = 0;
-#pragma omp parallel for reduction(+ : sum) schedule(static)
-  for (int p = 0; p < static_cast<int>(x.cols()); ++p)
-    if (w[p] > 0) sum += ((x.col(p) - x_pred.col(p)) / w[p] - work.col(p)).squaredNorm();
-  return std::sqrt(sum);
-}
-
 double incremental_energy(const Problem& prob, const ConstraintState& s, const Eigen::Matrix3Xd& x,
                           const Eigen::Matrix3Xd& x_pred, double h) {
   const Eigen::VectorXd& w = prob.particles.w;

@@ -1,5 +1,6 @@
-// The two measures a simulation run logs per evaluation besides the dual residual
-// (harness/io/run_result.hpp, IterationLog::primal_residual and IterationLog::energy).
+// The incremental energy a simulation run logs per evaluation (harness/io/run_result.hpp,
+// IterationLog::energy) and Newton's line search reads (harness/sim/newton.hpp, which also has the
+// primal residual g).
 #pragma once
 
 #include "../../problems/dual_system.hpp"
@@ -8,10 +9,6 @@
 #include <Eigen/Dense>
 
 namespace xb {
-
-// ‖M(x − x̃) − ∇Cᵀλ‖₂ over free particles; `work` is scratch (∇Cᵀλ).
-double primal_residual(const Problem& prob, const DualSystem& ds, const ConstraintState& s, const Eigen::Matrix3Xd& x,
-                       const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& lambda, Eigen::Matrix3Xd& work);
 
 // ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) over constraints with α > 0: the energy one substep minimises.
 double incremental_energy(const Problem& prob, const ConstraintState& s, const Eigen::Matrix3Xd& x,

@@ -1,62 +1,20 @@
 // A simulation run — the stepper, Algorithm 4 of the supplemental — with any method in the inner
-// step (the loop: class Simulation in simulation.cpp):
+// step (the loop: class Simulation in simulation_impl.hpp, simulation.cpp and simulation_step.cpp):
 //   per substep: v += h·g; x̃ = x + h·v; x = x̃; λ = 0
 //     repeat: C, ∇C at x → dual residual ‖C + α̃λ‖ (logged) → stop? → method step
 //             (local sweep, or A Δλ = b with b = −(C + α̃λ) in the dual or the primal form
-//             (Params::form); λ += Δλ; x += ω M⁻¹∇CᵀΔλ)
+//             (Params::form), with XPBD's simplifications as switches (global_step.hpp);
+//             λ += Δλ; x += ω M⁻¹∇CᵀΔλ, or Newton on E: step = newton, newton.hpp)
 //             → collisions (if the scene has colliders)
 //     v = (x − x_old)/h
 // A failed run is a result (its status), never a crash.
 #pragma once
 
-#include "../params.hpp"
-#include "../../problems/problem.hpp"
-#include "../../core/sparse.hpp"
-#include "../io/run_result.hpp"
-#include "../io/state_io.hpp"
+#include "run_options.hpp"
 
-#include <functional>
 #include <string>
 
 namespace xb {
-
-// One global outer iteration's linear step, as `capture` sees it: the dual system (A is filled
-// in either form) and what the primal form is built from.
-struct SystemView {
-  int frame, substep, iteration;
-  const SparseMatrix& A;
-  const Vector& b;
-  const ConstraintState& state;
-  const Eigen::VectorXd& alpha_tilde;
-  const Eigen::Matrix3Xd& x;
-};
-
-// Where a run stands, after each evaluation of the dual residual (RunOptions::on_iteration).
-struct IterationProgress {
-  int frame, first_frame, frames;  // frames: how many the run takes, from first_frame
-  int substep, substeps;
-  int iteration, max_iterations;
-  double relative_dual_residual;
-};
-
-struct RunOptions {
-  double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
-  // Solve every substep also by the reference method (harness/sim/reference.hpp) and log the
-  // position error per outer iteration. Its time is excluded from wall_time and time_budget.
-  bool reference = false;
-  // Called with the system of every global outer iteration before it is solved; returning true
-  // ends the run (used by `capture`).
-  std::function<bool(const SystemView&)> on_system;
-  // Called after every evaluation of the dual residual (live progress: harness/cli/progress.hpp).
-  std::function<void(const IterationProgress&)> on_iteration;
-  // Called after every frame with the positions (for mesh output).
-  std::function<void(int frame, const Eigen::Matrix3Xd& x)> on_frame;
-  // Called after every frame with the state the next frame starts from (for --save-state).
-  std::function<void(const SimState&)> on_state;
-  // Start from this state (positions, velocities; frames numbered from its frame) instead of
-  // the scene's start. Its particle count must match the problem's.
-  const SimState* initial_state = nullptr;
-};
 
 // Runs `method` (a name from methods()) on a copy of `prob`. Never throws for a numerical
 // failure; throws xb::Error for a bad method name.

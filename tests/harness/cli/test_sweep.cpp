@@ -324,6 +324,7 @@ TEST(Reference, PositionErrorIsOneAtPredictionAndVanishesForConvergedDirectSolve
   // The reference is the dual CHOLMOD iteration: the same path to round-off only in the dual form
   // (the primal recovery Δλ = α̃⁻¹(b − JΔx) loses digits on the stiff bar: 2e-4 apart after 35 steps).
   p.form = "dual";
+  p.reference_method = "xpbd";  // XPBD's fixed point (the default here is Newton's: tests/harness/sim/test_newton.cpp)
   const Problem prob = build_problem(p);
   RunOptions opt;
   opt.reference = true;

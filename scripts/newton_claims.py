@@ -1,0 +1,155 @@
+#!/usr/bin/env python3
+"""The card's claims about XPBD's simplifications and Newton's method, measured (docs/newton.md).
+
+usage: python3 scripts/newton_claims.py tournier | chen | macklin | omega | mgpbd_k
+           [--bench build/xpbd-bench] [--out DIR] [--mesh bunny:12k]
+
+tournier  heavy_rope and pendulum (problems/scenes/), variants none, mu1e12, mass_ratio_1e4,
+          dt_30hz; XPBD with xpbd.geometric_stiffness none | diagonal | full and Newton, cholmod,
+          --reference (Newton's): status, outer iterations, worst final position error and
+          relative Newton residual of any substep, the light particles' largest speed.
+chen      squash (--mesh) and twist_bar 7e9 (resolution 6), cholmod, 100 outer iterations with
+          xpbd.primal_residual zero | keep: the relative Newton and dual residuals over iterations.
+macklin   mass_chain (256 links, masses graded to mass_ratio), dual against primal form with
+          cg and jacobi-pcg (linear.tol 1e-6, fixed), under mass ratio (1 … 1e6, compliance 1e-8)
+          and compliance (1e-4 … 1e-10, mass ratio 1); bar_hang under stiffness 1e5 … 1e11:
+          mean (P)CG iterations per solve.
+omega     squash (--mesh): XPBD at omega 1 and 0.25 against Newton, cholmod, --reference.
+mgpbd_k   squash (--mesh): mgpbd on XPBD's K and on Newton's K (linear.forcing fixed, tol 1e-8):
+          levels, operator complexity, PCG iterations per outer iteration.
+
+Each run is its own process; every command is printed, with the 1-min load before it.
+"""
+import argparse
+import os
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(ROOT, "problems", "scenes")
+
+
+def run(args, name, scene, solver, sets=(), profile=None, reference=False):
+    out = os.path.join(args.out, name + ".h5")
+    if os.path.exists(out):
+        os.remove(out)
+    cmd = [args.bench, "run", "--scene", scene, "--solver", solver, "--out", out, "--quiet"]
+    cmd += ["--profile", profile] if profile else []
+    cmd += ["--reference"] if reference else []
+    for s in sets:
+        cmd += ["--set", s]
+    load = open("/proc/loadavg").read().split()[0]
+    print(f"# load {load}: {' '.join(cmd)}", flush=True)
+    subprocess.run(cmd, check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with h5py.File(out) as f:
+        r = f["runs"][list(f["runs"])[0]]
+        attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in r.attrs.items()}
+        data = {k: np.array(r[k]) for k in ("iteration", "relative_newton_residual", "relative_dual_residual",
+                                             "position_error", "linear_iterations", "wall_time", "final_positions")
+                if k in r}
+    return attrs, data
+
+
+def substep_ends(data):
+    """Indices of each substep's last entry."""
+    it = data["iteration"]
+    return [i for i in range(len(it)) if i + 1 == len(it) or it[i + 1] == 0]
+
+
+def tournier(args):
+    print("| scene | variant | outer method | status | outer its | worst position error | worst rel. Newton res. |")
+    print("|---|---|---|---|---|---|---|")
+    for scene in ("heavy_rope", "pendulum"):
+        for variant in ("none", "mu1e12", "mass_ratio_1e4", "dt_30hz"):
+            for method in ("none", "diagonal", "full", "newton"):
+                sets = [f"variant={variant}"]
+                sets += [f"xpbd.geometric_stiffness={method}"] if method != "newton" else []
+                a, d = run(args, f"t_{scene}_{variant}_{method}", scene, "cholmod", sets,
+                           profile="newton" if method == "newton" else None, reference=True)
+                ends = substep_ends(d) if "iteration" in d else []
+                pe = max((d["position_error"][i] for i in ends), default=float("nan")) if "position_error" in d else float("nan")
+                nr = max((d["relative_newton_residual"][i] for i in ends), default=float("nan"))
+                label = "Newton" if method == "newton" else f"XPBD, {method}"
+                print(f"| {scene} | {variant} | {label} | {a.get('status')} | {a.get('outer_iterations')} | "
+                      f"{pe:.2e} | {nr:.2e} |", flush=True)
+
+
+def chen(args):
+    cases = [("squash", [f"mesh={args.mesh}"]), ("twist_bar", ["stiffness=7e9", "resolution=6"])]
+    marks = [1, 5, 10, 20, 40, 60, 100]
+    print("| scene | g | " + " | ".join(f"it {k}" for k in marks) + " | final position error |")
+    print("|---|---|" + "---|" * (len(marks) + 1))
+    for scene, sets in cases:
+        for keep in ("zero", "keep"):
+            a, d = run(args, f"c_{scene}_{keep}", scene, "cholmod",
+                       sets + [f"xpbd.primal_residual={keep}", "max_iterations=100", "rtol=0", "atol=0"], reference=True)
+            nr, dr = d["relative_newton_residual"], d["relative_dual_residual"]
+            cells = [f"{nr[k]:.3g} / {dr[k]:.3g}" if k < len(nr) else "—" for k in marks]
+            print(f"| {scene} | {keep} | " + " | ".join(cells) + f" | {a.get('final_position_error', float('nan')):.3g} |",
+                  flush=True)
+
+
+def macklin(args):
+    print("| case | dual CG | primal CG | dual Jacobi-PCG | primal Jacobi-PCG |")
+    print("|---|---|---|---|---|")
+    cases = [(f"mass_ratio {m:g}", [f"mass_ratio={m}"]) for m in (1, 1e2, 1e4, 1e6)]
+    cases += [(f"compliance {c:g}", [f"compliance={c}", "mass_ratio=1"]) for c in (1e-4, 1e-7, 1e-10)]
+    for label, sets in cases:
+        cells = []
+        for solver in ("cg", "jacobi-pcg"):
+            for form in ("dual", "primal"):
+                a, d = run(args, f"m_{label.replace(' ', '_')}_{solver}_{form}", "mass_chain", solver,
+                           sets + [f"form={form}", "resolution=256", "linear.forcing=fixed", "linear.tol=1e-6",
+                                   "linear.max_iterations=100000", "frames=2"])
+                li = d["linear_iterations"][d["linear_iterations"] > 0]
+                cells.append((f"{li.mean():.1f}" if len(li) else "—") + ("" if a.get("status") == "ok" else f" ({a.get('status')})"))
+        print(f"| mass_chain 256, {label} | " + " | ".join(cells) + " |", flush=True)
+    for mu in (1e5, 1e7, 1e9, 1e11):  # a 3D case under stiffness: bar_hang, 4 cubes across (1.5K tets)
+        cells = []
+        for solver in ("cg", "jacobi-pcg"):
+            for form in ("dual", "primal"):
+                a, d = run(args, f"m_bar_{mu:g}_{solver}_{form}", "bar_hang", solver,
+                           [f"stiffness={mu}", f"form={form}", "linear.forcing=fixed", "linear.tol=1e-6",
+                            "linear.max_iterations=100000", "frames=2"])
+                li = d["linear_iterations"][d["linear_iterations"] > 0]
+                cells.append((f"{li.mean():.1f}" if len(li) else "—") + ("" if a.get("status") == "ok" else f" ({a.get('status')})"))
+        print(f"| bar_hang, stiffness {mu:g} | " + " | ".join(cells) + " |", flush=True)
+
+
+def omega(args):
+    print("| outer method | status | outer its | wall time s | final position error | final rel. Newton res. |")
+    print("|---|---|---|---|---|---|")
+    for label, sets, profile in (("XPBD, omega = 1", ["omega=1"], None), ("XPBD, omega = 0.25", [], None),
+                                 ("Newton", [], "newton")):
+        a, d = run(args, f"o_{label.split(',')[-1].strip().replace(' ', '')}", "squash", "cholmod",
+                   [f"mesh={args.mesh}"] + sets, profile=profile, reference=True)
+        print(f"| {label} | {a.get('status')} | {a.get('outer_iterations')} | {a.get('wall_time'):.3g} | "
+              f"{a.get('final_position_error'):.3g} | {a.get('final_relative_newton_residual'):.3g} |", flush=True)
+
+
+def mgpbd_k(args):
+    print("| K | levels | operator complexity | PCG iterations per outer iteration |")
+    print("|---|---|---|---|")
+    for label, profile in (("XPBD's (M + Jᵀα̃⁻¹J)", None), ("Newton's (M + Σπ(H_j))", "newton")):
+        a, d = run(args, f"k_{'newton' if profile else 'xpbd'}", "squash", "mgpbd",
+                   [f"mesh={args.mesh}", "linear.forcing=fixed", "linear.tol=1e-8", "max_iterations=8"], profile=profile)
+        its = " ".join(str(int(v)) for v in d["linear_iterations"][1:])
+        print(f"| {label} | {a.get('levels')} | {a.get('operator_complexity', float('nan')):.3g} | {its} |", flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("claim", choices=["tournier", "chen", "macklin", "omega", "mgpbd_k"])
+    ap.add_argument("--bench", default=os.path.join(ROOT, "build", "xpbd-bench"))
+    ap.add_argument("--out", default="/tmp/xb_newton_claims")
+    ap.add_argument("--mesh", default="bunny:12k")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    globals()[args.claim](args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
