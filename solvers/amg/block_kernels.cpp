@@ -118,7 +118,10 @@ void for_each_node_product(const BlockOperator& op, const CsrOf<S>& A, const S* 
   const int ui = op.uniform_rows, uj = op.uniform_cols;
 #pragma omp parallel if (A.rows() > kMinParallelRows)
   {
-  std::vector<S> xg(ui == 6 && uj == 6 ? op.max_row_length : 0);
+  // The gather buffer, per thread and kept between calls: no allocation per pass (the block
+  // Lanczos of a small level runs many short ones).
+  thread_local std::vector<S> xg;
+  if (ui == 6 && uj == 6 && static_cast<int>(xg.size()) < op.max_row_length) xg.resize(op.max_row_length);
 #pragma omp for schedule(static)
   for (int I = 0; I < nr; ++I) {
     const int bi = p.rows(I);
