@@ -4,8 +4,9 @@
 #   scripts/get_meshes.sh NAME:SIZE ...      e.g.  bunny:12k  armadillo:50k  bunny:270k
 #   scripts/get_meshes.sh --all              bunny and armadillo at 5k, 12k and 50k (270k only on request)
 #
-# NAME: bunny | armadillo. SIZE: 5k | 12k | 50k | 270k (the target tet count; the result lands
-# within about 15% of it, the exact count is in data/meshes/NAME_SIZE.log).
+# NAME: bunny | armadillo. SIZE: 5k | 12k | 50k | 270k | 850k (the target tet count; the result
+# lands within about 15% of it, the exact count is in data/meshes/NAME_SIZE.log). 850k is the
+# paper's largest bunny (several minutes and a few GB of memory in tetgen).
 #
 # Where the geometry comes from: Debian's libcgal-demo ships /usr/share/doc/libcgal-dev/data.tar.gz
 # with data/meshes/bunny00.off (the Stanford bunny, 75K faces) and data/meshes/armadillo.off
@@ -88,7 +89,8 @@ make_mesh() {  # name size
   local name="$1" size="$2" target src
   case "$size" in
     5k) target=5000 ;; 12k) target=12000 ;; 50k) target=50000 ;; 270k) target=270000 ;;
-    *) die "unknown size '$size' (valid: 5k, 12k, 50k, 270k)" ;;
+    850k) target=850000 ;;
+    *) die "unknown size '$size' (valid: 5k, 12k, 50k, 270k, 850k)" ;;
   esac
   case "$name" in
     bunny) src=bunny00.off ;; armadillo) src=armadillo.off ;;
@@ -154,7 +156,7 @@ EOF
   echo "get_meshes.sh: wrote $base.{node,ele} ($count tets)" >&2
 }
 
-[[ $# -ge 1 ]] || die "usage: get_meshes.sh NAME:SIZE ... | --all   (NAME: bunny|armadillo, SIZE: 5k|12k|50k|270k)"
+[[ $# -ge 1 ]] || die "usage: get_meshes.sh NAME:SIZE ... | --all   (NAME: bunny|armadillo, SIZE: 5k|12k|50k|270k|850k)"
 specs=("$@")
 if [[ "$1" == "--all" ]]; then
   specs=(bunny:5k bunny:12k bunny:50k armadillo:5k armadillo:12k armadillo:50k)

@@ -43,6 +43,14 @@ struct AmgOptions {
   // ≤ 1e-14 there (bar_hang); the smallest real coupling on the captured systems is 3e-6 (squash
   // bunny:50k). 0 = keep every block.
   double drop_tolerance = 1e-10;
+  // Smoothed P: node blocks (scalar levels: entries) below this fraction of the largest block
+  // of their row node are dropped after the smoothing (ML/MueLu's filtered prolongator): a
+  // sparser P makes both the Galerkin products and the coarse operator cheaper. 0 = keep all.
+  double prolongator_drop_tolerance = 0.0;
+  // Refresh the coarse levels (level 0's Galerkin product and all below it) only on every k-th
+  // refresh after a setup; between them the V-cycle keeps the last refreshed coarse levels (a
+  // lagged but still SPD preconditioner) and level 0's own smoother is refreshed. 1 = always.
+  int coarse_refresh_interval = 1;
   // D of the smoothed P: block | scalar. Block (a scalar layout's blocks are its diagonal): the
   // same or fewer iterations than the scalar D on the captured primal systems (squash 29 against
   // 31), and the block smoother's λ_max(D⁻¹A) serves P too (one Lanczos per level, not two).

@@ -15,6 +15,7 @@ namespace xb::amg {
 struct BlockOperator {
   BlockPattern pattern;
   int uniform_rows = 0, uniform_cols = 0;  // every row (column) node's size when all share it, else 0
+  int max_row_length = 0;                  // the longest row of A (the gathered kernels' buffer)
 
   // False (and empty) when A is not node-block CSR in these layouts or a node holds more than
   // kMaxNodeSize unknowns.

@@ -23,6 +23,7 @@ void Hierarchy::build(const SparseMatrix& A) {
   levels_[0].A = &A;
   fine_nnz_ = A.nonZeros();
   filter_ = ZeroBlockFilter{};
+  refreshes_ = 0;
   if (info_.block_size > 1) {
     Level& L0 = levels_[0];
     L0.nodes = NodeLayout::uniform(static_cast<int>(A.rows()), info_.block_size);
@@ -56,10 +57,10 @@ void Hierarchy::make_level_smoother(Level& L) {
   L.smoother = make_smoother(opt_.smoother, *L.A, L.nodes, L.A_blocks.get());
 }
 
-void Hierarchy::finish_levels() {
-  if (opt_.coarse_solver == "direct") factor_coarsest();  // the smoother kind solves with no factor
-  share_level0_lambda();
-  if (opt_.precision == "single") make_single();  // after the shared λ, which the float copies take
+void Hierarchy::finish_levels(size_t fine_levels) {
+  if (fine_levels >= levels_.size() && opt_.coarse_solver == "direct") factor_coarsest();  // the smoother kind solves with no factor
+  if (fine_levels >= levels_.size()) share_level0_lambda();  // a lagged refresh keeps the coarse smoothers as they were
+  if (opt_.precision == "single") make_single(fine_levels);  // after the shared λ, which the float copies take
 }
 
 void Hierarchy::share_level0_lambda() {
@@ -113,6 +114,9 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
                                                NodeLayout{T.col_start}, reuse);
     take(T.P, std::move(S.P));
     take(T.R, std::move(S.R));
+    if (opt_.prolongator_drop_tolerance > 0 &&
+        drop_small_blocks(T.P, L.nodes, NodeLayout{T.col_start}, opt_.prolongator_drop_tolerance) > 0)
+      take(T.R, transpose(T.P));
     T.max_row_entries = 0;
     for (int i = 0; i < n; ++i) T.max_row_entries = std::max(T.max_row_entries, static_cast<int>(T.P.row(i).nonZeros()));
   }
@@ -142,6 +146,14 @@ bool Hierarchy::refresh(const SparseMatrix& A) {
     throw Error("mgpbd: refresh with a different sparsity pattern (a full setup is needed)");
   if (filtered() && !filter_.refresh(A)) return false;
   levels_[0].A = filtered() ? &filter_.matrix() : &A;
+  // amg.coarse_refresh_interval: the coarse levels only on every k-th refresh (lagged), level
+  // 0's smoother always.
+  const bool coarse = ++refreshes_ % opt_.coarse_refresh_interval == 0;
+  if (!coarse) {
+    levels_[0].smoother->refresh(*levels_[0].A);
+    finish_levels(1);
+    return true;
+  }
   for (size_t l = 0; l + 1 < levels_.size(); ++l) {
     Level& L = levels_[l];
     Level& next = levels_[l + 1];

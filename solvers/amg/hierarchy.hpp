@@ -25,6 +25,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -69,6 +70,8 @@ class Hierarchy {
     build(A);
   }
   // A: same pattern as at build(), new values. Throws xb::Error if the pattern size changed.
+  // With amg.coarse_refresh_interval = k > 1 only every k-th refresh after build() recomputes
+  // the coarse levels; the others refresh level 0's smoother alone.
   // Returns false, with only level 0 refreshed, when level 0 dropped blocks (amg.drop_tolerance)
   // that A's values no longer make negligible: the hierarchy is stale and a full setup is due.
   bool refresh(const SparseMatrix& A);
@@ -99,10 +102,12 @@ class Hierarchy {
   void make_level_smoother(Level& L);
   // After setup or refresh: the coarsest level's factor (coarse_solver = direct), the shared λ of
   // jacobi_omega = level0, then the float copies of precision = single, which take that λ.
-  void finish_levels();
+  // fine_levels < num_levels(): only levels [0, fine_levels) changed (a lagged refresh): the
+  // coarsest factor and the coarser float copies are kept.
+  void finish_levels(size_t fine_levels = SIZE_MAX);
   // amg.precision = single: the float copies of the levels (after setup and refresh) and the
   // V-cycle on them (vcycle.cpp).
-  void make_single();
+  void make_single(size_t fine_levels = SIZE_MAX);
   void vcycle_single(const Vector& b, Vector& x);
   void coarse_solve(const Vector& b, Vector& x);
   // jacobi_omega = level0: level 0's λ_max on every coarser level's smoother.
@@ -114,6 +119,7 @@ class Hierarchy {
   ZeroBlockFilter filter_;  // level 0's A_F, when blocks were dropped
   bool filtered() const { return filter_.dropped_blocks() > 0; }
   long fine_nnz_ = 0;       // the caller's A
+  long refreshes_ = 0;      // values-only refreshes since the last build (coarse_refresh_interval)
   // Coarsest level: dense Cholesky while small (the usual case, ≤ max_coarse rows), sparse LDLᵀ
   // when max_levels stopped the coarsening early.
   static constexpr int kDenseCoarseLimit = 1500;

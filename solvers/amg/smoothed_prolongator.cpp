@@ -220,6 +220,68 @@ bool add_scaled_in_place(const SparseMatrix& X, double a, SparseMatrix& Y) {
 }
 }  // namespace
 
+long drop_small_blocks(SparseMatrix& P, const NodeLayout& fine, const NodeLayout& coarse, double tol) {
+  BlockPattern pp;
+  const bool blocks = !fine.scalar() && !coarse.scalar() && pp.build(P, fine, coarse);
+  if (!blocks) {  // entries: the pattern of one-row nodes and one-column nodes
+    pp = BlockPattern{};
+    const int n = static_cast<int>(P.rows()), m = static_cast<int>(P.cols());
+    for (int i = 0; i <= n; ++i) pp.row_start.push_back(i);
+    for (int j = 0; j <= m; ++j) pp.col_start.push_back(j);
+    pp.ptr.assign(P.outerIndexPtr(), P.outerIndexPtr() + n + 1);
+    pp.col.assign(P.innerIndexPtr(), P.innerIndexPtr() + P.nonZeros());
+    pp.offset.resize(P.nonZeros());
+    for (int i = 0; i < n; ++i)
+      for (int k = pp.ptr[i]; k < pp.ptr[i + 1]; ++k) pp.offset[k] = k - pp.ptr[i];
+  }
+  const int nr = pp.row_nodes();
+  const int* po = P.outerIndexPtr();
+  const double* pv = P.valuePtr();
+  std::vector<char> keep(pp.col.size(), 1);
+  std::vector<int> len(nr, 0);  // the kept scalar row length of each row node
+  long dropped = 0;
+#pragma omp parallel for schedule(static) reduction(+ : dropped)
+  for (int I = 0; I < nr; ++I) {
+    const int s = pp.row_start[I], b = pp.rows(I);
+    if (b == 0) continue;
+    double big = 0;
+    std::vector<double> norm2(pp.ptr[I + 1] - pp.ptr[I], 0.0);
+    for (int k = pp.ptr[I]; k < pp.ptr[I + 1]; ++k) {
+      double& v = norm2[k - pp.ptr[I]];
+      for (int r = 0; r < b; ++r)
+        for (int c = 0; c < pp.cols(pp.col[k]); ++c) v += std::pow(pv[po[s + r] + pp.offset[k] + c], 2);
+      big = std::max(big, v);
+    }
+    for (int k = pp.ptr[I]; k < pp.ptr[I + 1]; ++k) {
+      keep[k] = norm2[k - pp.ptr[I]] >= tol * tol * big;
+      if (keep[k]) len[I] += pp.cols(pp.col[k]);
+      else dropped += static_cast<long>(b) * pp.cols(pp.col[k]);
+    }
+  }
+  if (dropped == 0) return 0;
+  SparseMatrix Q(P.rows(), P.cols());
+  int* qo = Q.outerIndexPtr();
+  qo[0] = 0;
+  for (int I = 0; I < nr; ++I)
+    for (int r = pp.row_start[I]; r < pp.row_start[I + 1]; ++r) qo[r + 1] = qo[r] + len[I];
+  Q.resizeNonZeros(qo[P.rows()]);
+#pragma omp parallel for schedule(static)
+  for (int I = 0; I < nr; ++I)
+    for (int r = pp.row_start[I]; r < pp.row_start[I + 1]; ++r) {
+      int at = qo[r];
+      for (int k = pp.ptr[I]; k < pp.ptr[I + 1]; ++k) {
+        if (!keep[k]) continue;
+        const int w = pp.cols(pp.col[k]), c0 = pp.col_start[pp.col[k]];
+        for (int c = 0; c < w; ++c, ++at) {
+          Q.innerIndexPtr()[at] = c0 + c;
+          Q.valuePtr()[at] = pv[po[r] + pp.offset[k] + c];
+        }
+      }
+    }
+  take(P, std::move(Q));
+  return dropped;
+}
+
 SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix& T, JacobiDiagonal diag,
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
                                        const NodeLayout& coarse_nodes, const ProlongatorReuse& reuse) {

@@ -38,6 +38,13 @@ SmoothedProlongator smooth_prolongator(const SparseMatrix& A, const SparseMatrix
                                        const NodeLayout& nodes, int lanczos_steps, unsigned seed,
                                        const NodeLayout& coarse_nodes = {}, const ProlongatorReuse& reuse = {});
 
+// Filtered prolongator (amg.prolongator_drop_tolerance, as ML/MueLu drop small entries of the
+// smoothed P): drops from P every node block (fine node I × coarse node J; with a scalar layout,
+// or P not node-block CSR in these layouts, every entry) whose Frobenius norm is below
+// tol · the largest of its row node (row). The largest is always kept, so no row empties. Returns
+// the number of entries dropped (P is unchanged when none is).
+long drop_small_blocks(SparseMatrix& P, const NodeLayout& fine, const NodeLayout& coarse, double tol);
+
 // B = Aᵀ (parallel over A's columns is not needed: a counting sort, O(nnz)).
 SparseMatrix transpose(const SparseMatrix& A);
 

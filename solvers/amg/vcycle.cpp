@@ -135,8 +135,8 @@ void Hierarchy::vcycle(const Vector& b, Vector& x) {
   }
 }
 
-void Hierarchy::make_single() {
-  for (size_t l = 0; l + 1 < levels_.size(); ++l) {
+void Hierarchy::make_single(size_t fine_levels) {
+  for (size_t l = 0; l + 1 < levels_.size() && l < fine_levels; ++l) {
     Level& L = levels_[l];
     const DiagonalRelaxation<double>* relax = L.smoother->relaxation();
     if (!relax) throw Error("amg.precision=single: the smoother " + L.smoother->name() + " has no single-precision form");

@@ -1,16 +1,20 @@
 // The V-cycle's node-block kernels (block_kernels.hpp) against Eigen's CSR products on real
 // primal-form matrices: K (uniform 3×3 blocks, the unrolled path), a tentative P, R and coarse
 // operator whose nodes have 3, 5 or 6 unknowns (the general path), in double and float; and a
-// primal hierarchy hands every level's A, P and R to them.
+// primal hierarchy hands every level's A, P and R to them. A V-cycle by node blocks is the one by
+// plain CSR rows (same smoothers, same levels) to round-off, with the same PCG iterations.
 #include "solvers/amg/block_kernels.hpp"
 #include "solvers/amg/galerkin.hpp"
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/amg/relaxation/block_diagonal.hpp"
+#include "solvers/krylov/pcg.hpp"
 #include "test_amg_primal.hpp"
 
 #include "amg_test_support.hpp"
 
 #include <gtest/gtest.h>
+
+#include <type_traits>
 
 using namespace xb;
 using namespace xb::amg;
@@ -76,6 +80,16 @@ void expect_all_match(double tol) {
   EXPECT_EQ(op.uniform_rows, 3);
   EXPECT_EQ(op.uniform_cols, 3);
   expect_kernels_match<S>(K, op, nodes, tol, "K");
+  {  // every aggregate with 6 columns: a uniform 6×6 Galerkin operator (the gathered SIMD path)
+    const Tentative T6 = tentative_prolongator(nodal_aggregation(K, nodes, 0.0, &standard_aggregation), bar().rigid);
+    const NodeLayout c6{T6.col_start};
+    const SparseMatrix A6 = galerkin_product(T6.R, K, T6.P);
+    BlockOperator op6;
+    ASSERT_TRUE(op6.build(A6, c6, c6));
+    ASSERT_EQ(op6.uniform_rows, 6);
+    ASSERT_EQ(op6.uniform_cols, 6);
+    expect_kernels_match<S>(A6, op6, c6, tol, "6x6 T^T K T");
+  }
   // A tentative P whose first particle is an aggregate of its own (3 of the 6 rigid modes): the
   // coarse nodes have 3 and 6 unknowns, and the Galerkin operator's blocks are unequal too.
   Aggregates agg = nodal_aggregation(K, nodes, 0.0, &standard_aggregation);
@@ -158,4 +172,69 @@ TEST(AmgBlockKernels, LanczosByBlocksEqualsTheScalarEstimate) {
   EXPECT_GT(scalar, 1.0);  // D⁻¹K has λ_max above 1 (its diagonal blocks are I)
   EXPECT_NEAR(blocks, scalar, 1e-10 * scalar);
   EXPECT_LE((v1 - v2).norm(), 1e-8 * v1.norm());
+}
+
+namespace {
+// The V-cycle of h (Algorithm 2) by plain CSR rows in precision S: the same levels, the same
+// polynomial smoothers with their block-operator pointer cleared (the node-by-node CSR path of
+// diagonal_relaxation.cpp), Eigen's products for the residual, R and P, a dense coarse solve.
+template <class S>
+Vector csr_vcycle(const Hierarchy& h, const Vector& b) {
+  using V = VectorOf<S>;
+  const int nl = h.num_levels();
+  const bool single = std::is_same_v<S, float>;
+  std::vector<CsrOf<S>> A(nl), P(nl), R(nl);
+  std::vector<DiagonalRelaxation<S>> relax(nl);
+  for (int l = 0; l < nl; ++l) {
+    A[l] = h.matrix(l).cast<S>();
+    if (l + 1 == nl) break;
+    P[l] = h.level(l).T.P.cast<S>();
+    R[l] = h.level(l).T.R.cast<S>();
+    if constexpr (std::is_same_v<S, float>) relax[l] = h.level(l).single.relax;
+    else relax[l] = *h.level(l).smoother->relaxation();
+    relax[l].blocks = nullptr;
+  }
+  const double scale = single ? b.cwiseAbs().maxCoeff() : 1.0;  // the float V-cycle runs on b/‖b‖∞
+  std::vector<V> x(nl), rhs(nl);
+  rhs[0] = (b / scale).cast<S>();
+  for (int l = 0; l + 1 < nl; ++l) {
+    relax[l].presmooth(A[l], rhs[l], x[l], true);
+    rhs[l + 1] = R[l] * V(rhs[l] - A[l] * x[l]);
+  }
+  const Eigen::MatrixXd Ac(h.matrix(nl - 1));
+  x[nl - 1] = Ac.llt().solve(rhs[nl - 1].template cast<double>()).template cast<S>();
+  for (int l = nl - 2; l >= 0; --l) {
+    x[l] += P[l] * x[l + 1];
+    relax[l].postsmooth(A[l], rhs[l], x[l]);
+  }
+  return scale * x[0].template cast<double>();
+}
+}  // namespace
+
+// Node-block storage gives the V-cycle of CSR storage: in double to 1e-12, in float (the default
+// precision) to float round-off, and PCG to 1e-8 takes the same iterations with either.
+TEST(AmgBlockKernels, BlockVcycleEqualsTheCsrVcycleAndItsPcgIterations) {
+  const auto c = primal_case("cloth_hang", {{"resolution", "24"}}, 3, 0);
+  for (const std::string precision : {"double", "single"}) {
+    AmgOptions opt;
+    opt.max_coarse = 50;
+    opt.precision = precision;
+    Hierarchy h;
+    h.setup(c.K, opt, {3, &c.rigid});
+    ASSERT_GE(h.num_levels(), 3);
+    ASSERT_EQ(h.level(1).A_blocks->uniform_rows, 6);  // the rigid-mode level's 6×6 path runs
+    const bool single = precision == "single";
+    auto reference = [&](const Vector& r) { return single ? csr_vcycle<float>(h, r) : csr_vcycle<double>(h, r); };
+    const Vector b = c.f;
+    Vector z;
+    h.vcycle(b, z);
+    const Vector z_ref = reference(b);
+    EXPECT_LE((z - z_ref).norm(), (single ? 2e-5 : 1e-12) * z_ref.norm()) << precision;
+    Vector x1, x2;
+    const LinearStats s1 = pcg(c.K, b, x1, [&](const Vector& r, Vector& y) { h.vcycle(r, y); }, 1e-8, 500);
+    const LinearStats s2 = pcg(c.K, b, x2, [&](const Vector& r, Vector& y) { y = reference(r); }, 1e-8, 500);
+    EXPECT_EQ(s1.status, LinearStatus::converged) << precision;
+    EXPECT_EQ(s1.iterations, s2.iterations) << precision;
+    EXPECT_LE((x1 - x2).norm(), 1e-6 * x2.norm()) << precision;
+  }
 }

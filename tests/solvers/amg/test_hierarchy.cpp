@@ -4,8 +4,10 @@
 #include "solvers/amg/galerkin.hpp"
 #include "solvers/amg/hierarchy.hpp"
 #include "solvers/kernels.hpp"
+#include "solvers/krylov/pcg.hpp"
 
 #include "amg_test_support.hpp"
+#include "test_amg_primal.hpp"
 
 #include <gtest/gtest.h>
 
@@ -104,4 +106,79 @@ TEST(AmgBlockOptions, AutoResolvesByBlockSizeAndRigidNeedsABasis) {
   EXPECT_THROW(resolve_options(o, {1, nullptr}), Error);
   o.prolongator = "energy";
   EXPECT_THROW(resolve_options(o, {}), Error);
+}
+
+namespace {
+// The primal K of a small cloth one outer iteration apart (same pattern, new values).
+struct TwoStates {
+  xb::test::PrimalCase a, b;
+};
+const TwoStates& two_states() {
+  static const TwoStates s{xb::test::primal_case("cloth_hang", {{"resolution", "24"}}, 3, 0),
+                           xb::test::primal_case("cloth_hang", {{"resolution", "24"}}, 3, 1)};
+  return s;
+}
+}  // namespace
+
+// amg.coarse_refresh_interval = 2: the first refresh after a setup renews level 0's smoother (and
+// its float copy) but keeps A_1 = Pᵀ A_old P; the second recomputes A_1 from the new values. At 1
+// (the default) every refresh does. The V-cycle stays SPD either way.
+TEST(AmgLazySetup, CoarseRefreshIntervalLagsTheCoarseLevels) {
+  const TwoStates& s = two_states();
+  const SparseMatrix &K1 = s.a.K, &K2 = s.b.K;
+  ASSERT_EQ(K1.nonZeros(), K2.nonZeros());
+  for (const int k : {1, 2}) {
+    AmgOptions o;
+    o.max_coarse = 50;
+    o.coarse_refresh_interval = k;
+    o.drop_tolerance = 0;  // level 0 is K itself
+    Hierarchy h;
+    h.setup(K1, o, {3, &s.a.rigid});
+    ASSERT_GE(h.num_levels(), 3);
+    const Eigen::MatrixXd old1(h.matrix(1));
+    const Eigen::MatrixXd new1(galerkin_product(h.level(0).T.R, K2, h.level(0).T.P));
+    ASSERT_GT(rel_diff(old1, new1), 1e-6);
+    const double lambda_old = h.level(0).smoother->lambda_max();
+    h.refresh(K2);
+    EXPECT_NE(h.level(0).smoother->lambda_max(), lambda_old) << "level 0's smoother is refreshed every time";
+    // level 0's float copy follows K2 whatever k
+    EXPECT_LE(rel_diff(Eigen::MatrixXd(h.level(0).single.A.cast<double>()), Eigen::MatrixXd(K2)), 1e-6) << k;
+    if (k == 1) {
+      EXPECT_LE(rel_diff(Eigen::MatrixXd(h.matrix(1)), new1), 1e-12);
+    } else {
+      EXPECT_LE(rel_diff(Eigen::MatrixXd(h.matrix(1)), old1), 1e-15) << "a lagged refresh keeps A_1";
+      EXPECT_LE(rel_diff(Eigen::MatrixXd(h.level(1).single.A.cast<double>()), old1), 1e-6);
+    }
+    // still a preconditioner for CG (the float V-cycle is symmetric to float round-off only)
+    Vector x;
+    const LinearStats st = pcg(K2, s.b.f, x, [&](const Vector& r, Vector& z) { h.vcycle(r, z); }, 1e-8, 300);
+    EXPECT_EQ(st.status, LinearStatus::converged) << "after refresh 1, k = " << k;
+    h.refresh(K2);
+    EXPECT_LE(rel_diff(Eigen::MatrixXd(h.matrix(1)), new1), 1e-12) << "refresh 2 renews A_1 at k = " << k;
+    EXPECT_LE(rel_diff(Eigen::MatrixXd(h.level(1).single.A.cast<double>()), new1), 1e-6) << k;
+  }
+}
+
+// amg.prolongator_drop_tolerance: a sparser smoothed P (R still Pᵀ), so fewer non-zeros in A_1
+// and in the operator complexity; a V-cycle that still preconditions CG. 0 keeps every block.
+TEST(AmgLazySetup, ProlongatorDropToleranceThinsPAndTheCoarseLevels) {
+  const xb::test::PrimalCase& c = two_states().a;
+  std::vector<long> p_nnz;
+  std::vector<double> oc;
+  for (const double tol : {0.0, 0.3}) {
+    AmgOptions o;
+    o.max_coarse = 50;
+    o.precision = "double";  // the SPD check below is to 1e-10
+    o.prolongator_drop_tolerance = tol;
+    Hierarchy h;
+    h.setup(c.K, o, {3, &c.rigid});
+    ASSERT_GE(h.num_levels(), 2);
+    p_nnz.push_back(h.level(0).T.P.nonZeros());
+    oc.push_back(h.operator_complexity());
+    EXPECT_LE(rel_diff(Eigen::MatrixXd(h.level(0).T.R), Eigen::MatrixXd(h.level(0).T.P.transpose())), 0) << tol;
+    EXPECT_FALSE(h.level(0).P_blocks.empty()) << "a filtered P keeps its node blocks";
+    check_vcycle_spd(h, 2, "drop tolerance " + std::to_string(tol), SymmetryScale::energy);
+  }
+  EXPECT_LT(p_nnz[1], p_nnz[0]) << "the key is ignored";
+  EXPECT_LT(oc[1], oc[0]);
 }
