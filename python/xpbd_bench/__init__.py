@@ -122,7 +122,12 @@ def run(scene, solvers, out, frames=None, set=None, form=None, profile=None, tim
         _core.count_runs(out)  # refuses a file that is not a results file, before anything runs
         with tempfile.TemporaryDirectory(prefix="xpbd_bench_run_", dir=os.path.dirname(os.path.abspath(out))) as d:
             part = os.path.join(d, "runs.h5")
-            _run(scene, names, objects, part, frames, set, form, profile, time_budget, reference, progress)
+            try:
+                _run(scene, names, objects, part, frames, set, form, profile, time_budget, reference, progress)
+            except WriteError as e:  # the new runs go to a part first: name the file the caller gave
+                e.args = (str(e).replace(part, out),)
+                e.filename = out
+                raise
             _core.append_results(part, out)
         return read(out)
     _run(scene, names, objects, out, frames, set, form, profile, time_budget, reference, progress)
