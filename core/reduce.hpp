@@ -41,6 +41,39 @@ std::array<double, K> deterministic_sums(long n, ChunkSum&& chunk_sum) {
   return total;
 }
 
+// The same K sums, in one parallel region whose thread t of T takes the chunks from the chunk
+// boundary nearest block_start(t, T) to the one nearest block_start(t + 1, T): blocks balanced by
+// another measure than the index count (SpMV's rows of about equal non-zeros, kernels.cpp), cut
+// on chunk boundaries so that each chunk is still summed whole by one thread. block_start must be
+// non-decreasing in t; its values are indices in [0, n].
+template <int K, class BlockStart, class ChunkSum>
+std::array<double, K> deterministic_sums_in_blocks(long n, BlockStart&& block_start, ChunkSum&& chunk_sum) {
+  std::array<double, K> total{};
+  const long nc = reduce_chunks(n);
+  if (nc <= 1) {
+    if (n > 0) chunk_sum(0L, n, total.data());
+    return total;
+  }
+  thread_local std::vector<double> partial;
+  partial.assign(static_cast<std::size_t>(nc) * K, 0.0);
+  double* part = partial.data();
+#pragma omp parallel
+  {
+    const int t = omp_get_thread_num(), T = omp_get_num_threads();
+    auto first_chunk = [&](int k) -> long {
+      if (k <= 0) return 0;
+      if (k >= T) return nc;
+      return std::min(nc, (static_cast<long>(block_start(k, T)) + reduce_chunk / 2) / reduce_chunk);
+    };
+    const long c1 = first_chunk(t + 1);
+    for (long c = first_chunk(t); c < c1; ++c)
+      chunk_sum(c * reduce_chunk, std::min(n, (c + 1) * reduce_chunk), part + c * K);
+  }
+  for (long c = 0; c < nc; ++c)
+    for (int k = 0; k < K; ++k) total[k] += part[c * K + k];
+  return total;
+}
+
 // One sum: Σ_i term(i) over [0, n), the terms of a chunk added in index order.
 template <class Term>
 double deterministic_sum(long n, Term&& term) {
