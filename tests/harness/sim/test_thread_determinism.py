@@ -34,6 +34,9 @@ EXCLUDED = {
     "setup_time_total": "s, measured (mgpbd's statistics)",
     "refresh_time_total": "s, measured (mgpbd's statistics)",
     "reference_time": "s, measured (--reference)",
+    "setup_time": "s, measured (solve)",
+    "solve_time": "s, measured (solve)",
+    "time": "s since the solve began, per iteration, measured (solve)",
     "created": "the UTC date and time of the run",
     # the machine's state and the thread count, which is what the test varies
     "load_average": "the 1-minute load at the process's start",
@@ -41,19 +44,25 @@ EXCLUDED = {
 }
 
 
-# (name, extra arguments of `run`): each one process per thread count.
-COMMON = ["--frames", "1", "--set", "max_iterations=3"]
+# Each case is one command, run once per thread count ({sys}: the system `capture` writes first).
+RUN = ["run", "--frames", "1", "--set", "max_iterations=3", "--quiet"]
 SQUASH = ["--scene", "squash", "--set", "resolution=14"]  # 1,983 particles: dual 8,832 rows, primal 5,949
+CAPTURE = ["capture", *SQUASH, "--frame", "0", "--iteration", "1", "--quiet"]
 CASES = [
     # a tet scene: every in-house method, the global ones in both forms (mgpbd: the float V-cycle)
-    ("squash", [*SQUASH, "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg,mgpbd", "--form", "dual,primal"]),
+    ("squash", [*RUN, *SQUASH, "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg,mgpbd",
+                "--form", "dual,primal"]),
     # mgpbd with the double V-cycle; the outer iterations after the first refresh the hierarchy
-    ("squash_mgpbd_double", [*SQUASH, "--solver", "mgpbd", "--form", "dual,primal", "--set", "amg.precision=double"]),
+    ("squash_mgpbd_double", [*RUN, *SQUASH, "--solver", "mgpbd", "--form", "dual,primal",
+                             "--set", "amg.precision=double"]),
     # the cloth, 64 x 64 particles: primal 12,288 rows
-    ("cloth", ["--scene", "cloth_hang", "--set", "resolution=63",
+    ("cloth", [*RUN, "--scene", "cloth_hang", "--set", "resolution=63",
                "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg,mgpbd", "--form", "dual,primal"]),
     # the Newton step, with the reference solution of the time step beside it
-    ("newton", [*SQUASH, "--profile", "newton", "--solver", "mgpbd", "--form", "primal", "--reference"]),
+    ("newton", [*RUN, *SQUASH, "--profile", "newton", "--solver", "mgpbd", "--form", "primal", "--reference"]),
+    # the linear level: one captured system solved to 1e-6 (Python's solvers come through here too)
+    ("solve", ["solve", "--system", "{sys}", "--solver", "cg,jacobi-pcg,mgpbd", "--form", "dual,primal",
+               "--tol", "1e-6", "--quiet"]),
 ]
 
 
@@ -110,15 +119,21 @@ def main():
     only = set(filter(None, args.only.split(",")))
     failures, compared = [], 0
     with tempfile.TemporaryDirectory() as tmp:
-        for name, extra in CASES:
+        system = os.path.join(tmp, "system")
+        proc = subprocess.run([args.binary, *CAPTURE, "--out", system], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE, text=True)
+        if proc.returncode != 0:
+            sys.exit(f"capture: exit {proc.returncode}: {proc.stderr.strip()}")
+        for name, command in CASES:
             if only and name not in only:
                 continue
+            command = [a.replace("{sys}", system + ".h5") for a in command]
             files = {}
             for t in threads:
                 out = os.path.join(tmp, f"{name}_{t}.h5")
                 env = dict(os.environ, OMP_NUM_THREADS=str(t))
-                proc = subprocess.run([args.binary, "run", *COMMON, *extra, "--quiet", "--out", out], env=env,
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                proc = subprocess.run([args.binary, *command, "--out", out], env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.PIPE, text=True)
                 if proc.returncode != 0:
                     failures.append(f"{name} at {t} threads: exit {proc.returncode}: {proc.stderr.strip()}")
                     break
