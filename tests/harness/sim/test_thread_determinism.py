@@ -5,10 +5,11 @@ record by record, bit for bit: every attribute and every dataset of every run, e
 that say when, how fast or on how many threads a run ran (EXCLUDED, each with its reason).
 
 The set: every in-house method (xpbd-jacobi, xpbd-authors, xpbd-gs, cg, jacobi-pcg, mgpbd) on a
-tet scene (squash) and on the cloth, the global ones in both forms, mgpbd also with the float
-V-cycle and with setup intervals > 1 (setup, then values-only refreshes), and a Newton run with
---reference. Sizes are chosen so that every vector spans several of core/reduce.hpp's chunks of
-4096 indices and every parallel loop runs on all threads (above kMinParallelRows = 2048).
+tet scene (squash) and on the cloth, the global ones in both forms; mgpbd with the float and the
+double V-cycle over two frames (setups and refreshes); a Newton run with --reference; a captured
+system solved in both forms. Sizes are chosen so that every vector spans several of
+core/reduce.hpp's chunks of 4096 indices and every parallel loop runs on all threads (above
+kMinParallelRows = 2048).
 
 usage: python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench [--threads 1,2,3,4]
 """
@@ -45,22 +46,25 @@ EXCLUDED = {
 
 
 # Each case is one command, run once per thread count ({sys}: the system `capture` writes first).
-RUN = ["run", "--frames", "1", "--set", "max_iterations=3", "--quiet"]
+RUN = ["run", "--set", "max_iterations=2", "--quiet"]
 SQUASH = ["--scene", "squash", "--set", "resolution=14"]  # 1,983 particles: dual 8,832 rows, primal 5,949
 CAPTURE = ["capture", *SQUASH, "--frame", "0", "--iteration", "1", "--quiet"]
 CASES = [
-    # a tet scene: every in-house method, the global ones in both forms (mgpbd: the float V-cycle)
-    ("squash", [*RUN, *SQUASH, "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg,mgpbd",
+    # a tet scene: every in-house method, the global ones in both forms
+    ("squash", [*RUN, *SQUASH, "--frames", "1", "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg",
                 "--form", "dual,primal"]),
-    # mgpbd with the double V-cycle; the outer iterations after the first refresh the hierarchy
-    ("squash_mgpbd_double", [*RUN, *SQUASH, "--solver", "mgpbd", "--form", "dual,primal",
+    # mgpbd with the float and the double V-cycle; two frames: setups, then refreshes (the dual form
+    # refreshes from the second outer iteration on, the primal from the second frame)
+    ("squash_mgpbd", [*RUN, *SQUASH, "--frames", "2", "--solver", "mgpbd", "--form", "dual,primal"]),
+    ("squash_mgpbd_double", [*RUN, *SQUASH, "--frames", "2", "--solver", "mgpbd", "--form", "dual,primal",
                              "--set", "amg.precision=double"]),
     # the cloth, 64 x 64 particles: primal 12,288 rows
-    ("cloth", [*RUN, "--scene", "cloth_hang", "--set", "resolution=63",
+    ("cloth", [*RUN, "--frames", "1", "--scene", "cloth_hang", "--set", "resolution=63",
                "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg,mgpbd", "--form", "dual,primal"]),
     # the Newton step, with the reference solution of the time step beside it
-    ("newton", [*RUN, *SQUASH, "--profile", "newton", "--solver", "mgpbd", "--form", "primal", "--reference"]),
-    # the linear level: one captured system solved to 1e-6 (Python's solvers come through here too)
+    ("newton", [*RUN, *SQUASH, "--frames", "1", "--profile", "newton", "--solver", "mgpbd", "--form", "primal",
+                "--reference"]),
+    # the linear level: one captured system solved to 1e-6 (xpbd_bench.solve takes this path too)
     ("solve", ["solve", "--system", "{sys}", "--solver", "cg,jacobi-pcg,mgpbd", "--form", "dual,primal",
                "--tol", "1e-6", "--quiet"]),
 ]
