@@ -52,8 +52,8 @@ double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) {
   };
   return deterministic_sums_in_blocks<1>(n, block_start, [&](long lo, long hi, double* acc) {
     double xy = 0;
-    for (long i = lo; i < hi; ++i) {
-      yp[i] = row_dot(outer, cols, val, xp, static_cast<int>(i));
+    for (int i = static_cast<int>(lo); i < static_cast<int>(hi); ++i) {
+      yp[i] = row_dot(outer, cols, val, xp, i);
       xy += xp[i] * yp[i];
     }
     acc[0] = xy;
