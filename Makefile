@@ -44,7 +44,7 @@ figures: build
 # variants, Newton) x linear methods, one process per run, each with --reference; the time to a
 # position error of 1e-2 and 1e-4 against the backward-Euler solution, into plots/race/
 # (race_<scene>.png, summary.md, timings.tsv). `race`: one size per scene (the spec's quick_size)
-# and Eisenstat-Walker only (~10-15 minutes on a quiet 2-core machine, references included);
+# and Eisenstat-Walker only (10-20 minutes on a quiet 2-core machine, references included);
 # `race-full`: every size and forcing rule (squash to 850K tets: hours). Both resume (finished runs
 # are kept); RACE_ARGS="--fresh", "--only squash", "--outer newton", "--linear mgpbd,cholmod".
 # Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md

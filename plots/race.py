@@ -139,7 +139,7 @@ def draw_scene(plt, sc, out):
     """A row per outer method, a panel per size, a line per linear method at its best."""
     colours = colour_of(sc.linears)
     fig, axes = plt.subplots(len(sc.outers), len(sc.order), figsize=(5.4 * len(sc.order), 3.8 * len(sc.outers)),
-                             squeeze=False, constrained_layout=True, sharey=True)
+                             squeeze=False, constrained_layout=True)
     for j, s in enumerate(sc.order):
         best = sc.pair_best(s)
         for i, o in enumerate(sc.outers):
@@ -149,10 +149,11 @@ def draw_scene(plt, sc, out):
                 if oo != o or ser is None:
                     continue
                 ok, _ = xbruns.reference_verdict(e["run"])
-                ax.semilogy(ser[0], np.maximum(ser[1], 1e-16), "-" if ok else ":", color=colours[m], marker=".", ms=3,
+                ax.semilogy(ser[0], np.maximum(ser[1], 1e-300), "-" if ok else ":", color=colours[m], marker=".", ms=3,
                             lw=1.4, label=tag(e) + ("" if ok else " (reference unconverged)"))
             for t in sc.thresholds:
                 ax.axhline(t, color="black", lw=0.8, ls=":")
+            ax.set_ylim(min(sc.thresholds) * 1e-3, 2.0)  # a converged run's 1e-16 would flatten the race
             ax.set_title(f"{sc.outer_label(o)}: {sc.name} {s}", fontsize=9)
             ax.set_xlabel("wall time within the frame (s)")
             ax.set_ylabel("position error")
