@@ -20,7 +20,11 @@ void row_block(const int* outer, int n, int t, int T, int& lo, int& hi) {
   hi = start(t + 1);
 }
 
-void spmv(const SparseMatrix& A, const Vector& x, Vector& y) {
+namespace {
+// y = A x, and (Dot) x·y in the same pass: over spmv's row blocks cut on the nearest chunk
+// boundaries, so that x·y is summed per fixed chunk (core/reduce.hpp).
+template <bool Dot>
+double spmv_impl(const SparseMatrix& A, const Vector& x, Vector& y) {
   const int n = static_cast<int>(A.rows());
   const int* __restrict outer = A.outerIndexPtr();
   const int* __restrict cols = A.innerIndexPtr();
@@ -28,23 +32,15 @@ void spmv(const SparseMatrix& A, const Vector& x, Vector& y) {
   y.resize(n);
   const double* __restrict xp = x.data();
   double* __restrict yp = y.data();
+  if constexpr (!Dot) {
 #pragma omp parallel
-  {
-    int lo, hi;
-    row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
-    for (int i = lo; i < hi; ++i) yp[i] = row_dot(outer, cols, val, xp, i);
+    {
+      int lo, hi;
+      row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
+      for (int i = lo; i < hi; ++i) yp[i] = row_dot(outer, cols, val, xp, i);
+    }
+    return 0;
   }
-}
-
-double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) {
-  const int n = static_cast<int>(A.rows());
-  const int* __restrict outer = A.outerIndexPtr();
-  const int* __restrict cols = A.innerIndexPtr();
-  const double* __restrict val = A.valuePtr();
-  y.resize(n);
-  const double* __restrict xp = x.data();
-  double* __restrict yp = y.data();
-  // The row blocks of spmv, cut on the nearest chunk boundaries: x·y summed per fixed chunk.
   auto block_start = [&](int t, int T) {
     int lo, hi;
     row_block(outer, n, t, T, lo, hi);
@@ -59,6 +55,11 @@ double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) {
     acc[0] = xy;
   })[0];
 }
+}  // namespace
+
+void spmv(const SparseMatrix& A, const Vector& x, Vector& y) { spmv_impl<false>(A, x, y); }
+
+double spmv_dot(const SparseMatrix& A, const Vector& x, Vector& y) { return spmv_impl<true>(A, x, y); }
 
 void residual(const SparseMatrix& A, const Vector& x, const Vector& b, Vector& r) {
   const int n = static_cast<int>(A.rows());
