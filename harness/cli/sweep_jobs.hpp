@@ -1,0 +1,37 @@
+// How a sweep's jobs are spread (docs/commands.md, `sweep`): over N processes of this program on
+// one machine (--jobs N: a queue of job numbers in a pipe that the processes take from, so a slow
+// job does not hold up the others), over the ranks of mpirun (rank r of N takes the jobs whose
+// number is r mod N), or over the tasks of a cluster's job array (--part K/N, the same rule). Every
+// process appends its runs to the one results file (harness/io/recorder.hpp) as they end.
+#pragma once
+
+#include "args.hpp"
+
+#include <string>
+#include <vector>
+
+namespace xb {
+
+// Called by the CLI's main: this process is the xpbd-bench program, which --jobs starts again
+// (the Python module is not).
+void note_cli_program();
+
+// A part of a sweep's jobs: those whose number (0-based, in sweep order) is k mod n.
+struct SweepPart {
+  int k = 0, n = 1;
+  bool has(int job) const { return job % n == k; }
+};
+// "K/N" of --part (0 <= K < N). Throws xb::Error naming the flag.
+SweepPart parse_part(const std::string& text);
+
+// Whether this process is one of --jobs' workers (XB_SWEEP_QUEUE_FD set by the parent).
+bool is_queue_worker();
+// A worker's next job number from the queue; -1 when the queue is empty.
+int next_queued_job();
+
+// Starts `processes` copies of this program with `argv` (the sweep's own arguments, "sweep" first,
+// --jobs removed), hands them the job numbers `todo` through the queue and waits for them all.
+// Returns the worst exit code. Throws xb::Error when processes cannot be started.
+int run_queue_workers(int processes, const std::vector<int>& todo, const std::vector<std::string>& argv);
+
+}  // namespace xb
