@@ -16,7 +16,7 @@
 
 #include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
-#include "../../solvers/linear_solver.hpp"
+#include "../../solvers/mpi/distributed_kernel.hpp"
 #include "../../solvers/mpi/partition.hpp"
 #include "../../solvers/timer.hpp"
 
@@ -241,13 +241,21 @@ bool all_ranks(bool ok) {
   return all == 1;
 }
 
-// Whether mpirun's ranks share this sweep's jobs: not when a job's method is itself distributed
-// over the ranks (hypre, muelu): those ranks serve rank 0's solves, one job at a time.
+// Whether mpirun's ranks share this sweep's jobs: yes when no method is distributed; when every
+// one is (hypre, muelu), the ranks serve each of rank 0's solves instead, one job at a time, as
+// under `run`. A spec that mixes the two is refused (naming both).
 bool ranks_share_jobs(const Sweep& s) {
   if (mpi_size() == 1) return false;
-  for (const auto& j : s.jobs)
-    if (const MethodInfo* m = find_method(j.solver); m && m->distributed) return false;
-  return true;
+  std::string distributed, local;
+  for (const auto& name : s.spec.solvers) {
+    std::string& list = method_is_distributed(name) ? distributed : local;
+    list += (list.empty() ? "" : ", ") + name;
+  }
+  if (!distributed.empty() && !local.empty())
+    throw Error("sweep: " + s.spec.path + ": under mpirun a sweep's methods are all distributed (the ranks share each "
+                "solve) or none is (the ranks share the jobs); this one mixes " + distributed + " with " + local +
+                ": run them as two sweeps");
+  return distributed.empty();
 }
 
 }  // namespace
@@ -324,11 +332,13 @@ int cmd_sweep(const CommandArgs& argv) {
   Args args("sweep", argv, {{"--out"}, {"--time-budget"}, {"--size"}, {"--profile"}, {"--quiet", false}, {"--jobs"}, {"--part"}}, 1);
   const bool mpi = mpi_size() > 1, rank0 = mpi_rank() == 0;
   Sweep s;
+  bool share = false;
   std::exception_ptr failed;
   try {
     s = prepare(args);
     if (mpi && (args.has("--jobs") || args.has("--part")))
       throw Error("sweep: under mpirun the ranks share the jobs; --jobs and --part are for runs without it");
+    share = ranks_share_jobs(s);
   } catch (...) {
     failed = std::current_exception();
   }
@@ -340,7 +350,6 @@ int cmd_sweep(const CommandArgs& argv) {
     run_jobs(s, next_queued_job, static_cast<int>(s.jobs.size()), 0, " (pid " + std::to_string(::getpid()) + ")", 0);
     return 0;
   }
-  const bool share = ranks_share_jobs(s);
   if (mpi && !share && !rank0) return 0;  // this rank serves rank 0's distributed solves (main)
   return run_sweep(s, args, argv, share);
 }

@@ -92,6 +92,10 @@ int run_queue_workers(int processes, const std::vector<int>& todo, const std::ve
   ::fcntl(queue[0], F_SETFD, 0);  // the read end goes to the workers, the write end stays here
   std::vector<std::string> env = start_environment;
   env.push_back(std::string(queue_variable) + "=" + std::to_string(queue[0]));
+  // N processes share the cores: each gets its share of OpenMP threads, unless the user chose
+  // (OMP_NUM_THREADS; a spec's `threads` overrides both).
+  if (std::none_of(env.begin(), env.end(), [](const std::string& e) { return e.rfind("OMP_NUM_THREADS=", 0) == 0; }))
+    env.push_back("OMP_NUM_THREADS=" + std::to_string(std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN) / processes)));
   std::vector<char*> envp, args;
   for (auto& e : env) envp.push_back(e.data());
   envp.push_back(nullptr);

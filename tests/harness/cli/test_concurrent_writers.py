@@ -77,11 +77,11 @@ def temporaries(folder):
     return [os.path.join(d, f) for d, _, files in os.walk(folder) for f in files if f.endswith(".tmp")]
 
 
-def spec(folder, name, values, solvers=("xpbd-gs", "cholmod"), extra=""):
+def spec(folder, name, values, solvers=("xpbd-gs", "cholmod"), extra="", sets=""):
     path = os.path.join(folder, name)
     with open(path, "w") as f:
         f.write(f'scene = "cloth_hang"\nsolvers = {json.dumps(list(solvers))}\nframes = 1\n{extra}'
-                f'[set]\nresolution = 4\nthreads = 1\n[grid]\ncompliance = {json.dumps(values)}\n')
+                f'[set]\nresolution = 4\nthreads = 1\n{sets}[grid]\ncompliance = {json.dumps(values)}\n')
     return path
 
 
@@ -135,10 +135,13 @@ def killed_at_random(binary, work, rng):
     folder = os.path.join(work, "kill")
     os.makedirs(folder)
     out = os.path.join(folder, "k.h5")
-    s = spec(work, "kill.toml", [1e-8, 1e-6, 1e-4])
+    # Each run lasts its time budget (no tolerance can be met): 24 runs of 0.4 s, so that ten
+    # sweeps killed anywhere (a second or two into each) leave work for the resume.
+    s = spec(work, "kill.toml", [1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-2], extra="time_budget = 0.4\nrepeats = 2\n",
+             sets="max_iterations = 100000000\nrtol = 0\natol = 0\n")
     for i in range(10):
         p = start(binary, ["sweep", s, "--out", out])
-        time.sleep(rng.uniform(0.2, 3.0))
+        time.sleep(rng.uniform(0.3, 3.0))
         p.send_signal(signal.SIGKILL)
         p.communicate()
         if os.path.exists(out):
@@ -149,7 +152,7 @@ def killed_at_random(binary, work, rng):
     rc, text = finish(start(binary, ["sweep", s, "--out", out]))
     runs = runs_of(out)
     keys = [r["sweep_key"] for r in runs.values()]
-    if rc != 0 or len(runs) != 6 or len(set(keys)) != 6:
+    if rc != 0 or len(runs) != 24 or len(set(keys)) != 24:
         fail(case, f"the resume exited {rc} with {len(runs)} runs, {len(set(keys))} keys: {text[-500:]}")
     # run and capture killed the same way: the next one works and leaves no temporary file.
     for args in (["run", "--scene", "cloth_hang", "--solver", "xpbd-gs,cholmod,xpbd-jacobi", "--out", out, "--append"] + RUN,
@@ -226,14 +229,17 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--binary", required=True)
     ap.add_argument("--seed", type=int, default=int(time.time()))
+    ap.add_argument("--only", help="run only this case (a function name)")
     a = ap.parse_args()
     binary = os.path.abspath(a.binary)
     print(f"test_concurrent_writers: seed {a.seed}", flush=True)
     work = tempfile.mkdtemp(prefix="xb_concurrent_")
     try:
         for test in (eight_sweeps, eight_run_outs, waiting_is_said, shared_jobs):
-            test(binary, work)
-        killed_at_random(binary, work, random.Random(a.seed))
+            if a.only in (None, test.__name__):
+                test(binary, work)
+        if a.only in (None, "killed_at_random"):
+            killed_at_random(binary, work, random.Random(a.seed))
     finally:
         shutil.rmtree(work, ignore_errors=True)
     print(f"test_concurrent_writers: {len(FAILURES)} failures")

@@ -241,8 +241,11 @@ def real_full_disk(binary, work):
             out = os.path.join(mnt, "F.h5")
             assert xb(binary, ["run", "--scene", "cloth_hang", "--set", "resolution=8", "--frames", "1", "--solver",
                                "cholmod", "--out", out])[0] == 0
+            # Leave room for about one run (an append writes the run's file and the index, ~45 KB
+            # here), so that the first write fits or not and a later one surely does not.
+            st = os.statvfs(mnt)
             with open(os.path.join(mnt, "filler"), "wb") as f:
-                f.write(b"\0" * (100_000 if name == "sweep" else 150_000))
+                f.write(b"\0" * max(0, st.f_bavail * st.f_frsize - {"sweep": 70_000, "solve": 50_000}.get(name, 40_000)))
             before = snapshot(out)
             target = os.path.join(mnt, "P") if name == "capture" else out
             rc, err = xb(binary, args + ["--out", target])
