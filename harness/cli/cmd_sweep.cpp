@@ -10,6 +10,7 @@
 #include "progress.hpp"
 #include "run_setup.hpp"
 #include "../sim/simulation.hpp"
+#include "../io/file_lock.hpp"
 #include "../io/run_record.hpp"
 #include "sweep.hpp"
 #include "sweep_jobs.hpp"
@@ -60,15 +61,15 @@ void print_table(const std::vector<std::vector<std::string>>& rows) {
 
 // The runs of this sweep already in `out` (sweep_key → run name) and how many runs it holds.
 // Throws if the file holds another sweep's runs.
-// Runs that cannot be read are named on stderr (unless quiet) and counted in `skipped` (their jobs run again).
+// Runs that cannot be read are named on stderr and counted in `skipped` (their jobs run again).
 std::map<std::string, std::string> finished_runs(const std::string& out, const std::string& base, int& existing,
-                                                 int& skipped, bool quiet = false) {
+                                                 int& skipped) {
   std::map<std::string, std::string> finished;
   existing = skipped = 0;
   if (!std::filesystem::exists(out)) return finished;
   std::vector<std::string> bad;
   const auto runs = read_runs(out, false, &bad);
-  if (!quiet) warn_skipped("sweep", bad);
+  warn_skipped("sweep", bad);
   skipped = static_cast<int>(bad.size());
   existing = static_cast<int>(runs.size() + bad.size());
   for (const auto& r : runs) {
@@ -274,55 +275,99 @@ std::vector<std::string> without_jobs(const CommandArgs& argv) {
   return out;
 }
 
-// The sweep's jobs in this process's part (and its ranks' or processes'), those left to do first.
+// What is left to do: the jobs of this process's part (--part; all without) not yet in the file,
+// with the counts of the first line.
+struct Todo {
+  std::vector<int> jobs;
+  int in_part = 0, existing = 0, skipped = 0;
+};
+Todo left_to_do(const Sweep& s, const SweepPart& part) {
+  Todo t;
+  const auto finished = finished_runs(s.out, s.base, t.existing, t.skipped);  // resume: what is already in the file
+  for (const auto& j : s.jobs) {
+    const bool mine = part.has(j.index), done = finished.count(j.key) > 0;
+    t.in_part += mine;
+    if (mine && !done) t.jobs.push_back(j.index);
+  }
+  return t;
+}
+
+// "sweep: SPEC: 16 runs (3 already in FILE, 13 to do), shared by 2 ranks": with --part, the part's.
+void say_start(const Sweep& s, const Args& args, const Todo& t, bool share, int processes) {
+  const int total = static_cast<int>(s.jobs.size()), left = static_cast<int>(t.jobs.size());
+  std::cerr << "sweep: " << s.spec.path << ": " << total << " runs";
+  if (args.has("--part")) std::cerr << "; part " << args.get("--part") << " of them: " << t.in_part;
+  std::cerr << " (" << t.in_part - left << " already in " << s.out << ", " << left << " to do)";
+  if (share) std::cerr << ", shared by " << mpi_size() << " ranks";
+  else if (mpi_size() > 1) std::cerr << ", one at a time: the other ranks serve the distributed solvers (hypre, muelu)";
+  else if (processes > 1 && left > 1) std::cerr << " on " << std::min(processes, left) << " processes";
+  std::cerr << "\n";
+}
+
+// Under mpirun: rank 0's list of jobs to every rank, and the name of the counter (a file in the
+// runs folder, file_lock.hpp) by which they take them one by one, so that a slow job holds up no
+// other rank.
+std::string share_todo(std::vector<int>& jobs, const std::string& out) {
+  int n = static_cast<int>(jobs.size());
+  MPI_Bcast(&n, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  jobs.resize(static_cast<size_t>(n));
+  MPI_Bcast(jobs.data(), n, MPI_INT, 0, MPI_COMM_WORLD);
+  char id[9] = {};
+  if (mpi_rank() == 0) std::snprintf(id, sizeof id, "%s", random_hex8().c_str());
+  MPI_Bcast(id, sizeof id, MPI_CHAR, 0, MPI_COMM_WORLD);
+  return runs_folder(out) + "/queue-" + id;
+}
+
+// The sweep's jobs left to do: by this process, by --jobs' processes or shared by mpirun's ranks.
 // Prints the first line; returns the exit code.
 int run_sweep(const Sweep& s, const Args& args, const CommandArgs& argv, bool share) {
   const bool rank0 = mpi_rank() == 0;
   const int processes = args.has("--jobs") ? args.get_int("--jobs", 1) : 1;
   if (processes < 1 || processes > 1024) throw Error("sweep: --jobs must be between 1 and 1024");
-  const SweepPart part = share ? SweepPart{mpi_rank(), mpi_size()} : args.has("--part") ? parse_part(args.get("--part")) : SweepPart{};
-  int existing = 0, skipped = 0;
-  const auto finished = finished_runs(s.out, s.base, existing, skipped, !rank0);  // resume: what is already in the file
-  std::vector<int> todo;
-  int in_part = 0, already = 0;
-  for (const auto& j : s.jobs) {
-    const bool mine = part.has(j.index), done = finished.count(j.key) > 0;
-    already += done;
-    in_part += mine;
-    if (mine && !done) todo.push_back(j.index);
-  }
-  const int total = static_cast<int>(s.jobs.size()), left = static_cast<int>(todo.size());
-  if (rank0) {
-    // Under mpirun the counts are the whole sweep's; with --part, this part's.
-    std::cerr << "sweep: " << s.spec.path << ": " << total << " runs";
-    if (args.has("--part")) std::cerr << "; part " << args.get("--part") << " of them: " << in_part;
-    std::cerr << " (" << (share ? already : in_part - left) << " already in " << s.out << ", " << (share ? total - already : left)
-              << " to do)";
-    if (share) std::cerr << ", shared by " << mpi_size() << " ranks";
-    else if (mpi_size() > 1) std::cerr << ", one at a time: the other ranks serve the distributed solvers (hypre, muelu)";
-    else if (processes > 1 && left > 1) std::cerr << " on " << std::min(processes, left) << " processes";
-    std::cerr << "\n";
-  }
-  int rc = 0;
+  const SweepPart part = args.has("--part") ? parse_part(args.get("--part")) : SweepPart{};
+  Todo t;
   std::exception_ptr failed;
-  size_t at = 0;
-  auto next = [&] { return at < todo.size() ? todo[at++] : -1; };
+  if (rank0) {  // rank 0 reads the file for all ranks
+    try {
+      t = left_to_do(s, part);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+  }
+  if (share && !all_ranks(!failed) && !failed) return 2;  // rank 0 says why
+  if (failed) std::rethrow_exception(failed);
+  if (rank0) say_start(s, args, t, share, processes);
+  const std::string queue = share ? share_todo(t.jobs, s.out) : "";
+  const int left = static_cast<int>(t.jobs.size());
+  int rc = 0;
   try {
-    if (processes > 1 && left > 1)
-      rc = run_queue_workers(std::min(processes, left), todo, without_jobs(argv));
-    else
-      run_jobs(s, next, share ? total : in_part, in_part - left, share ? " (rank " + std::to_string(mpi_rank()) + ")" : "", existing);
+    if (share) {
+      SharedCounter counter(queue);
+      const auto next = [&] {
+        const long n = counter.next();
+        return n < left ? t.jobs[static_cast<size_t>(n)] : -1;
+      };
+      run_jobs(s, next, static_cast<int>(s.jobs.size()), 0, " (rank " + std::to_string(mpi_rank()) + ")", t.existing);
+    } else if (processes > 1 && left > 1) {
+      rc = run_queue_workers(std::min(processes, left), t.jobs, without_jobs(argv));
+    } else {
+      size_t at = 0;
+      run_jobs(s, [&] { return at < t.jobs.size() ? t.jobs[at++] : -1; }, t.in_part, t.in_part - left, "", t.existing);
+    }
   } catch (...) {
     failed = std::current_exception();
   }
-  if (share) MPI_Barrier(MPI_COMM_WORLD);  // every rank's runs are in the file before the summary
+  if (share) {
+    MPI_Barrier(MPI_COMM_WORLD);  // every rank's runs are in the file before the summary
+    if (rank0) remove_unused_counter(queue);
+  }
   if (failed) std::rethrow_exception(failed);
   if (!rank0) return rc;
   print_summary(s.spec, s.jobs, s.out);
   // The sweep did what it was asked (its runs are in the file), so it succeeds: exit code 1 here
   // would be a failed command that changed its output file.
-  if (skipped)
-    std::cerr << "sweep: warning: " << s.out << " holds " << skipped
+  if (t.skipped)
+    std::cerr << "sweep: warning: " << s.out << " holds " << t.skipped
               << " unreadable run(s), named above, left as they are (their jobs ran again)\n";
   return rc;
 }

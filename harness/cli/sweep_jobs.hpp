@@ -1,7 +1,8 @@
 // How a sweep's jobs are spread (docs/commands.md, `sweep`): over N processes of this program on
 // one machine (--jobs N: a queue of job numbers in a pipe that the processes take from, so a slow
-// job does not hold up the others), over the ranks of mpirun (rank r of N takes the jobs whose
-// number is r mod N), or over the tasks of a cluster's job array (--part K/N, the same rule). Every
+// job does not hold up the others), over the ranks of mpirun (they take rank 0's list of jobs one
+// by one through a counter file beside the results, harness/io/file_lock.hpp: cmd_sweep.cpp), or
+// over the tasks of a cluster's job array (--part K/N: the jobs whose number is K mod N). Every
 // process appends its runs to the one results file (harness/io/recorder.hpp) as they end.
 #pragma once
 

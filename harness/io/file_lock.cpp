@@ -2,6 +2,8 @@
 
 #include "atomic_file.hpp"
 
+#include "../../core/error.hpp"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -19,16 +21,28 @@ namespace xb {
 namespace {
 enum class Try { held, busy, unsupported };
 
-// One try (F_OFD_SETLK) or a wait (F_OFD_SETLKW) for a lock on the whole file.
-Try lock(int fd, FileLock::Kind kind, bool wait) {
+// One try (F_OFD_SETLK) or a wait (F_OFD_SETLKW) for a lock on the whole file (len 0), or on
+// bytes [start, start + len).
+Try lock(int fd, FileLock::Kind kind, bool wait, off_t start = 0, off_t len = 0) {
   struct flock fl {};
   fl.l_type = kind == FileLock::Kind::exclusive ? F_WRLCK : F_RDLCK;
-  fl.l_whence = SEEK_SET;  // l_start = l_len = 0: the whole file; l_pid must be 0 for OFD locks
+  fl.l_whence = SEEK_SET;  // l_pid must be 0 for OFD locks
+  fl.l_start = start;
+  fl.l_len = len;
   for (;;) {
     if (::fcntl(fd, wait ? F_OFD_SETLKW : F_OFD_SETLK, &fl) == 0) return Try::held;
     if (errno == EINTR) continue;
     return errno == EAGAIN || errno == EACCES ? Try::busy : Try::unsupported;
   }
+}
+
+void unlock(int fd, off_t start, off_t len) {
+  struct flock fl {};
+  fl.l_type = F_UNLCK;
+  fl.l_whence = SEEK_SET;
+  fl.l_start = start;
+  fl.l_len = len;
+  ::fcntl(fd, F_OFD_SETLK, &fl);
 }
 }  // namespace
 
@@ -69,6 +83,38 @@ FileLock& FileLock::operator=(FileLock&& o) noexcept {
     fd_ = std::exchange(o.fd_, -1);
   }
   return *this;
+}
+
+SharedCounter::SharedCounter(const std::string& path) : path_(path) {
+  std::error_code ec;
+  fs::create_directories(fs::path(path).parent_path(), ec);
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd_ < 0) throw Error("cannot open " + path + ": " + errno_text(errno));
+  lock(fd_, FileLock::Kind::shared, true, 1, 1);  // in use
+}
+
+SharedCounter::~SharedCounter() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+long SharedCounter::next() {
+  lock(fd_, FileLock::Kind::exclusive, true, 0, 1);
+  long long n = 0;
+  if (::pread(fd_, &n, sizeof n, 0) != static_cast<ssize_t>(sizeof n)) n = 0;  // a new file: 0
+  const long long after = n + 1;
+  const bool written = ::pwrite(fd_, &after, sizeof after, 0) == static_cast<ssize_t>(sizeof after);
+  unlock(fd_, 0, 1);
+  if (!written) throw Error("cannot write " + path_ + ": " + errno_text(errno));
+  return static_cast<long>(n);
+}
+
+bool remove_unused_counter(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool unused = lock(fd, FileLock::Kind::exclusive, false, 1, 1) == Try::held;
+  if (unused) ::unlink(path.c_str());
+  ::close(fd);
+  return unused;
 }
 
 }  // namespace xb

@@ -29,4 +29,25 @@ class FileLock {
   int fd_ = -1;
 };
 
+// A number that processes (mpirun's ranks, on one machine or many) take in turn, each a different
+// one: the next job of a sweep. The file's first 8 bytes hold the next number, read and increased
+// under a lock on byte 0; every user holds a shared lock on byte 1 while it works, so that a counter
+// file nobody holds (a killed sweep's) is known stale: remove_unused_counter.
+class SharedCounter {
+ public:
+  // Opens (creating it, and its folder, when missing) the counter file. Throws xb::Error.
+  explicit SharedCounter(const std::string& path);
+  ~SharedCounter();
+  SharedCounter(const SharedCounter&) = delete;
+  SharedCounter& operator=(const SharedCounter&) = delete;
+  // The next number: 0, 1, 2, ... over all users together.
+  long next();
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+// Removes a counter file that no process uses; true when it did.
+bool remove_unused_counter(const std::string& path);
+
 }  // namespace xb

@@ -1,6 +1,7 @@
 #include "results_index.hpp"
 
 #include "atomic_file.hpp"
+#include "file_lock.hpp"
 #include "h5io.hpp"
 #include "recorder.hpp"
 
@@ -233,6 +234,7 @@ void collect_garbage(const std::string& path, const Index& index, bool replaced)
     const std::string name = it->path().filename().string();
     std::error_code rm;
     if (name.ends_with(".tmp") || (replaced && is_run_file(name) && !keep.count(name))) fs::remove(it->path(), rm);
+    if (name.starts_with("queue-")) remove_unused_counter(it->path().string());  // a killed sweep's (file_lock.hpp)
   }
 }
 

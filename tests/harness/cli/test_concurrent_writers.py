@@ -68,9 +68,13 @@ def runs_of(path):
 
 
 def positions(path):
-    """sweep_key -> final_positions."""
+    """sweep_key -> final_positions; a key twice is a job run twice."""
     with h5py.File(path, "r") as f:
-        return {g.attrs["sweep_key"]: np.array(g["final_positions"]) for g in f["runs"].values()}
+        runs = [(g.attrs["sweep_key"], np.array(g["final_positions"])) for g in f["runs"].values()]
+    out = dict(runs)
+    if len(out) != len(runs):
+        fail("sweeps over processes", f"{path}: {len(runs)} runs of {len(out)} jobs: a job ran twice")
+    return out
 
 
 def temporaries(folder):
