@@ -17,7 +17,6 @@
 
 #include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
-#include "../../solvers/mpi/distributed_kernel.hpp"
 #include "../../solvers/mpi/partition.hpp"
 #include "../../solvers/timer.hpp"
 
@@ -31,7 +30,6 @@
 #include <iostream>
 #include <map>
 #include <memory>
-#include <set>
 #include <sstream>
 
 #include <unistd.h>
@@ -234,31 +232,6 @@ void run_jobs(const Sweep& s, const std::function<int()>& next, int total, int d
   }
 }
 
-// Every rank reaches this: true when all of them do (a rank that failed says why itself).
-bool all_ranks(bool ok) {
-  if (mpi_size() == 1) return ok;
-  int mine = ok ? 1 : 0, all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  return all == 1;
-}
-
-// Whether mpirun's ranks share this sweep's jobs: yes when no method is distributed; when every
-// one is (hypre, muelu), the ranks serve each of rank 0's solves instead, one job at a time, as
-// under `run`. A spec that mixes the two is refused (naming both).
-bool ranks_share_jobs(const Sweep& s) {
-  if (mpi_size() == 1) return false;
-  std::string distributed, local;
-  for (const auto& name : s.spec.solvers) {
-    std::string& list = method_is_distributed(name) ? distributed : local;
-    list += (list.empty() ? "" : ", ") + name;
-  }
-  if (!distributed.empty() && !local.empty())
-    throw Error("sweep: " + s.spec.path + ": under mpirun a sweep's methods are all distributed (the ranks share each "
-                "solve) or none is (the ranks share the jobs); this one mixes " + distributed + " with " + local +
-                ": run them as two sweeps");
-  return distributed.empty();
-}
-
 }  // namespace
 
 namespace {
@@ -383,7 +356,7 @@ int cmd_sweep(const CommandArgs& argv) {
     s = prepare(args);
     if (mpi && (args.has("--jobs") || args.has("--part")))
       throw Error("sweep: under mpirun the ranks share the jobs; --jobs and --part are for runs without it");
-    share = ranks_share_jobs(s);
+    share = ranks_share_jobs(s.spec.solvers, s.spec.path);
   } catch (...) {
     failed = std::current_exception();
   }

@@ -1,6 +1,10 @@
 #include "sweep_jobs.hpp"
 
 #include "../../core/error.hpp"
+#include "../../solvers/mpi/distributed_kernel.hpp"
+#include "../../solvers/mpi/partition.hpp"
+
+#include <mpi.h>
 
 #include <fcntl.h>
 #include <signal.h>
@@ -49,6 +53,27 @@ bool write_all(int fd, const void* data, size_t n) {
 }  // namespace
 
 void note_cli_program() { cli_program = true; }
+
+bool ranks_share_jobs(const std::vector<std::string>& solvers, const std::string& spec_path) {
+  if (mpi_size() == 1) return false;
+  std::string distributed, local;
+  for (const auto& name : solvers) {
+    std::string& list = method_is_distributed(name) ? distributed : local;
+    list += (list.empty() ? "" : ", ") + name;
+  }
+  if (!distributed.empty() && !local.empty())
+    throw Error("sweep: " + spec_path + ": under mpirun a sweep's methods are all distributed (the ranks share each "
+                "solve) or none is (the ranks share the jobs); this one mixes " + distributed + " with " + local +
+                ": run them as two sweeps");
+  return distributed.empty();
+}
+
+bool all_ranks(bool ok) {
+  if (mpi_size() == 1) return ok;
+  int mine = ok ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+  return all == 1;
+}
 
 SweepPart parse_part(const std::string& text) {
   const size_t slash = text.find('/');

@@ -17,6 +17,13 @@ namespace xb {
 // (the Python module is not).
 void note_cli_program();
 
+// Under mpirun: whether the ranks share a sweep's jobs: yes when none of its methods is distributed;
+// when every one is (hypre, muelu), the ranks serve each of rank 0's solves instead, one job at a
+// time, as under `run`. A spec that mixes the two is refused (naming both). False without mpirun.
+bool ranks_share_jobs(const std::vector<std::string>& solvers, const std::string& spec_path);
+// Every rank calls this: true when `ok` is true on all of them (a rank that failed says why itself).
+bool all_ranks(bool ok);
+
 // A part of a sweep's jobs: those whose number (0-based, in sweep order) is k mod n.
 struct SweepPart {
   int k = 0, n = 1;

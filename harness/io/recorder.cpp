@@ -4,7 +4,6 @@
 #include "atomic_file.hpp"
 #include "file_lock.hpp"
 #include "h5io.hpp"
-#include "results_index.hpp"
 
 #include "../../core/error.hpp"
 
@@ -75,8 +74,6 @@ std::string writer_words(const std::string& id) {
 }
 
 }  // namespace
-
-std::string runs_folder(const std::string& path) { return path + ".runs"; }
 
 ResultsWriter::ResultsWriter(std::string path, bool replace)
     : path_(std::move(path)), id_(new_writer_id()), replace_(replace) {}

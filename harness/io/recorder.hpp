@@ -15,6 +15,7 @@
 #pragma once
 
 #include "record.hpp"
+#include "results_index.hpp"
 
 #include <string>
 #include <vector>
@@ -63,8 +64,5 @@ int count_runs(const std::string& path);
 // folder beside it): the file to hand to someone else. Replaces dst atomically. Runs that cannot be
 // read are left out: returns their errors. Throws WriteError naming dst, or xb::Error naming src.
 std::vector<std::string> pack_runs(const std::string& src, const std::string& dst);
-
-// FILE.runs: the folder of a results file's runs and its lock.
-std::string runs_folder(const std::string& path);
 
 }  // namespace xb

@@ -3,7 +3,6 @@
 #include "atomic_file.hpp"
 #include "file_lock.hpp"
 #include "h5io.hpp"
-#include "recorder.hpp"
 
 #include "../../core/error.hpp"
 
@@ -93,6 +92,7 @@ bool inline_group(hid_t loc, const std::string& name) {
 
 }  // namespace
 
+std::string runs_folder(const std::string& path) { return path + ".runs"; }
 std::string results_lock_path(const std::string& path) { return runs_folder(path) + "/lock"; }
 
 RunFiles::~RunFiles() {

@@ -13,6 +13,8 @@
 
 namespace xb {
 
+// FILE.runs: the folder of a results file's runs (and of its lock).
+std::string runs_folder(const std::string& path);
 // FILE.runs/lock: the lock file of a results file (file_lock.hpp).
 std::string results_lock_path(const std::string& path);
 
