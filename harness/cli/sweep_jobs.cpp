@@ -78,7 +78,6 @@ bool all_ranks(bool ok) {
 SweepPart parse_part(const std::string& text) {
   const size_t slash = text.find('/');
   char *e1 = nullptr, *e2 = nullptr;
-  SweepPart p;
   if (slash != std::string::npos) {
     const std::string a = text.substr(0, slash), b = text.substr(slash + 1);
     const long k = std::strtol(a.c_str(), &e1, 10), n = std::strtol(b.c_str(), &e2, 10);
