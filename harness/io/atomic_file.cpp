@@ -233,24 +233,4 @@ void write_file_atomically(const std::string& path, const void* data, std::size_
   tmp.commit();
 }
 
-std::vector<char> read_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw Error("cannot read " + path + ": " + errno_text(errno));
-  std::vector<char> bytes;
-  char buf[65536];
-  for (;;) {
-    const ssize_t k = ::read(fd, buf, sizeof buf);
-    if (k < 0 && errno == EINTR) continue;
-    if (k < 0) {
-      const int e = errno;
-      ::close(fd);
-      throw Error("cannot read " + path + ": " + errno_text(e));
-    }
-    if (k == 0) break;
-    bytes.insert(bytes.end(), buf, buf + k);
-  }
-  ::close(fd);
-  return bytes;
-}
-
 }  // namespace xb

@@ -86,7 +86,5 @@ void remove_stale_temporaries(const std::string& path, bool all = false);
 void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body);
 // Writes n bytes as PATH through a temporary file. Throws WriteError.
 void write_file_atomically(const std::string& path, const void* data, std::size_t n);
-// The bytes of a file (one that is being appended to). Throws xb::Error naming it and the cause.
-std::vector<char> read_file(const std::string& path);
 
 }  // namespace xb

@@ -303,16 +303,6 @@ H create_memory_file() {
   return f;
 }
 
-H open_memory_file(const std::vector<char>& image, const std::string& path) {
-  silence_errors();
-  if (image.empty()) throw Error(path + ": is empty, not an HDF5 file");
-  H fapl = memory_access();
-  check(H5Pset_file_image(fapl, const_cast<char*>(image.data()), image.size()), "file image of " + path);  // copied
-  H f(H5Fopen(memory_name().c_str(), H5F_ACC_RDWR, fapl), H5Fclose);
-  if (f < 0) throw Error(path + ": not a readable HDF5 results file");
-  return f;
-}
-
 std::vector<char> file_image(hid_t file) {
   check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush (in memory)");
   const ssize_t n = H5Fget_file_image(file, nullptr, 0);
