@@ -9,6 +9,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -91,8 +92,13 @@ bool is_queue_worker() { return std::getenv(queue_variable) != nullptr; }
 
 int next_queued_job() {
   static const int fd = [] {
+    // "FD:PID": the queue's read end and the parent, whose end (a kill included) ends this worker too.
     const char* v = std::getenv(queue_variable);
-    return v ? std::atoi(v) : -1;
+    if (!v) return -1;
+    const char* colon = std::strchr(v, ':');
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (colon && ::getppid() != static_cast<pid_t>(std::atol(colon + 1))) std::_Exit(0);  // gone already
+    return std::atoi(v);
   }();
   if (fd < 0) return -1;
   // The parent writes 4-byte numbers, each in one write (atomic on a pipe), so one read of 4
@@ -115,7 +121,7 @@ int run_queue_workers(int processes, const std::vector<int>& todo, const std::ve
   if (::pipe2(queue, O_CLOEXEC) != 0) throw Error(std::string("sweep: --jobs: cannot make a pipe: ") + std::strerror(errno));
   ::fcntl(queue[0], F_SETFD, 0);  // the read end goes to the workers, the write end stays here
   std::vector<std::string> env = start_environment;
-  env.push_back(std::string(queue_variable) + "=" + std::to_string(queue[0]));
+  env.push_back(std::string(queue_variable) + "=" + std::to_string(queue[0]) + ":" + std::to_string(::getpid()));
   // N processes share the cores: each gets its share of OpenMP threads, unless the user chose
   // (OMP_NUM_THREADS; a spec's `threads` overrides both).
   if (std::none_of(env.begin(), env.end(), [](const std::string& e) { return e.rfind("OMP_NUM_THREADS=", 0) == 0; }))
