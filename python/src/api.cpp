@@ -102,7 +102,11 @@ nb::list parameter_list() {
 
 nb::list read(const std::string& path) {
   std::vector<std::string> skipped;
-  const std::vector<RunRecord> runs = read_runs(path, true, &skipped);
+  std::vector<RunRecord> runs;
+  {
+    nb::gil_scoped_release release;  // other threads go on while this one waits for a writer or reads
+    runs = read_runs(path, true, &skipped);
+  }
   for (const auto& s : skipped)
     if (PyErr_WarnEx(PyExc_RuntimeWarning, ("xpbd_bench.read: skipped: " + s).c_str(), 1) != 0) throw nb::python_error();
   nb::list l;
