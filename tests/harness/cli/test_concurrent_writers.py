@@ -21,6 +21,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import h5py
@@ -185,12 +186,20 @@ def waiting_is_said(binary, work):
     fd = os.open(out + ".runs/lock", os.O_RDWR)
     fcntl.fcntl(fd, fcntl.F_OFD_SETLKW, struct.pack("hhqqi", fcntl.F_WRLCK, 0, 0, 0, 0))
     p = start(binary, ["run", "--scene", "cloth_hang", "--solver", "xpbd-gs", "--out", out, "--append"] + RUN)
-    time.sleep(6)  # the run itself, then the wait
-    still = p.poll() is None
-    os.close(fd)
-    rc, text = finish(p)
-    if not still or rc != 0 or f"waiting for {out}: another writer holds it" not in text:
-        fail(case, f"waited: {still}, exit {rc}: {text[-500:]}")
+    lines = []
+    reader = threading.Thread(target=lambda: lines.extend(iter(p.stderr.readline, "")))
+    reader.start()
+    said = f"waiting for {out}: another writer holds it"
+    deadline = time.time() + 300  # the run first, then the wait (slow on a loaded machine)
+    while time.time() < deadline and not any(said in ln for ln in lines) and p.poll() is None:
+        time.sleep(0.1)
+    waited = p.poll() is None
+    os.close(fd)  # the lock goes with it
+    rc = p.wait(timeout=300)
+    reader.join()
+    text = "".join(lines)
+    if not waited or rc != 0 or said not in text:
+        fail(case, f"waited: {waited}, exit {rc}: {text[-500:]}")
     if len(runs_of(out)) != 2:
         fail(case, "the waiting writer's run is not in the file")
 
