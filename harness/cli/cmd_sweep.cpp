@@ -197,8 +197,8 @@ Sweep prepare(const Args& args) {
   return s;
 }
 
-// Runs the jobs `todo` (numbers into s.jobs; next() gives them one by one, -1 at the end) and
-// appends each run to s.out. `tag` ("" for a sweep run by one process, else which process) goes
+// Runs the jobs next() gives (numbers into s.jobs, one by one; -1 at the end) and appends each
+// run to s.out as it ends. `tag` ("" for a sweep run by one process, else which process) goes
 // in each line, written whole after the run when processes share stderr.
 void run_jobs(const Sweep& s, const std::function<int()>& next, int total, int done, const std::string& tag, int kept) {
   JobRunner runner(s.spec, s.base, s.swept);
@@ -232,9 +232,6 @@ void run_jobs(const Sweep& s, const std::function<int()>& next, int total, int d
   }
 }
 
-}  // namespace
-
-namespace {
 // argv without --jobs N: what each of --jobs' processes runs.
 std::vector<std::string> without_jobs(const CommandArgs& argv) {
   std::vector<std::string> out{"sweep"};
