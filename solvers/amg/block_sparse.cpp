@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <omp.h>
+#include <string>
 
 namespace xb::amg {
 
@@ -170,9 +171,10 @@ inline void block_madd_any(int bi, int bk, int bj, const double* a, int lda, con
     block_madd<0, 0>(bi, bk, bj, a, lda, b, ldb, c, ldc);
 }
 
-// Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes).
+// Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes); upper: only
+// its blocks J ≥ I (B's rows hold sorted column nodes: the loop starts at the first J ≥ I).
 void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
-                       SparseMatrix& C, const BlockPattern& pc, int I, std::vector<int>& pos) {
+                       SparseMatrix& C, const BlockPattern& pc, int I, std::vector<int>& pos, bool upper) {
   const int s = pa.row_start[I], bi = pa.rows(I);
   const int *ao = A.outerIndexPtr(), *bo = B.outerIndexPtr(), *co = C.outerIndexPtr();
   const int lda = ao[s + 1] - ao[s], ldc = co[s + 1] - co[s];
@@ -184,7 +186,10 @@ void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const Spar
     const double* a = A.valuePtr() + ao[s] + pa.offset[k];
     const int ldb = bo[sk + 1] - bo[sk];
     const double* b0 = B.valuePtr() + bo[sk];
-    for (int t = pb.ptr[K]; t < pb.ptr[K + 1]; ++t) {
+    const int t0 = upper ? static_cast<int>(std::lower_bound(pb.col.begin() + pb.ptr[K], pb.col.begin() + pb.ptr[K + 1], I) -
+                                            pb.col.begin())
+                         : pb.ptr[K];
+    for (int t = t0; t < pb.ptr[K + 1]; ++t) {
       const int J = pb.col[t], bj = pb.cols(J);
       const double* b = b0 + pb.offset[t];
       block_madd_any(bi, bk, bj, a, lda, b, ldb, c0 + pos[J], ldc);
@@ -194,17 +199,64 @@ void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const Spar
 }  // namespace
 
 void block_product_values(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
-                          SparseMatrix& C, const BlockPattern& pc) {
+                          SparseMatrix& C, const BlockPattern& pc, const std::vector<int>* mirror) {
   if (A.rows() != C.rows() || B.cols() != C.cols() || pa.col_start != pb.row_start || pc.ptr.size() != pa.ptr.size())
     throw Error("block product: the operands do not fit the cached pattern");
+  if (mirror && (mirror->size() != pc.col.size() || pc.row_start != pc.col_start))
+    throw Error("block product: the mirror map does not fit the product's pattern");
   const int nr = pa.row_nodes(), ncn = static_cast<int>(pc.col_start.size()) - 1;
+  const int* co = C.outerIndexPtr();
+  double* cv = C.valuePtr();
 #pragma omp parallel
   {
     std::vector<int> pos(ncn, 0);
 #pragma omp for schedule(dynamic, 8)
     for (int I = 0; I < nr; ++I)
-      if (pa.rows(I) > 0) product_block_row(A, pa, B, pb, C, pc, I, pos);
+      if (pa.rows(I) > 0) product_block_row(A, pa, B, pb, C, pc, I, pos, mirror != nullptr);
+    if (mirror) {
+      // Block (I, J), J < I, is block (J, I) transposed (the implicit barrier above: row J is
+      // done); a diagonal block's lower triangle is its upper one's.
+#pragma omp for schedule(dynamic, 8)
+      for (int I = 0; I < nr; ++I) {
+        const auto d = std::lower_bound(pc.col.begin() + pc.ptr[I], pc.col.begin() + pc.ptr[I + 1], I);
+        if (d != pc.col.begin() + pc.ptr[I + 1] && *d == I) {
+          const int off = pc.offset[d - pc.col.begin()];
+          for (int r = 1; r < pc.rows(I); ++r)
+            for (int c = 0; c < r; ++c)
+              cv[co[pc.row_start[I] + r] + off + c] = cv[co[pc.row_start[I] + c] + off + r];
+        }
+        for (int q = pc.ptr[I]; q < pc.ptr[I + 1] && pc.col[q] < I; ++q) {
+          const int J = pc.col[q], m = (*mirror)[q];
+          const double* src = cv + co[pc.row_start[J]] + pc.offset[m];
+          const int lds = co[pc.row_start[J] + 1] - co[pc.row_start[J]];
+          for (int r = 0; r < pc.rows(I); ++r) {
+            double* dst = cv + co[pc.row_start[I] + r] + pc.offset[q];
+            for (int c = 0; c < pc.cols(J); ++c) dst[c] = src[static_cast<long>(c) * lds + r];
+          }
+        }
+      }
+    }
   }
+}
+
+std::vector<int> block_mirror_map(const BlockPattern& pc) {
+  if (pc.row_start != pc.col_start) throw Error("block product: a mirror map needs a square node layout");
+  std::vector<int> m(pc.col.size(), -1);
+  const int nr = pc.row_nodes();
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (int I = 0; I < nr; ++I)
+    for (int q = pc.ptr[I]; q < pc.ptr[I + 1] && pc.col[q] < I; ++q) {
+      const int J = pc.col[q];
+      const auto first = pc.col.begin() + pc.ptr[J], last = pc.col.begin() + pc.ptr[J + 1];
+      const auto it = std::lower_bound(first, last, I);
+      if (it == last || *it != I)
+        ++bad;
+      else
+        m[q] = static_cast<int>(it - pc.col.begin());
+    }
+  if (bad) throw Error("block product: the pattern is not symmetric (" + std::to_string(bad) + " blocks without a mirror)");
+  return m;
 }
 
 SparseMatrix block_product(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
