@@ -171,6 +171,34 @@ inline void block_madd_any(int bi, int bk, int bj, const double* a, int lda, con
     block_madd<0, 0>(bi, bk, bj, a, lda, b, ldb, c, ldc);
 }
 
+// c_J += a·b_J for the blocks b_J of one row node K of B (blocks t0..t1): a is BI × BK, kept in
+// registers across them; blocks of another width than BJ go through block_madd_any. The sums are
+// block_madd's, in its order.
+template <int BI, int BK, int BJ>
+void row_madd(const double* __restrict a, int lda, const double* b0, int ldb, const BlockPattern& pb, int t0, int t1,
+              const int* pos, double* c0, int ldc) {
+  double ar[BI][BK];
+  for (int r = 0; r < BI; ++r)
+    for (int k = 0; k < BK; ++k) ar[r][k] = a[static_cast<long>(r) * lda + k];
+  for (int t = t0; t < t1; ++t) {
+    const int J = pb.col[t];
+    const double* __restrict b = b0 + pb.offset[t];
+    double* __restrict c = c0 + pos[J];
+    if (pb.cols(J) != BJ) {
+      block_madd_any(BI, BK, pb.cols(J), a, lda, b, ldb, c, ldc);
+      continue;
+    }
+    for (int r = 0; r < BI; ++r) {
+      double* cr = c + static_cast<long>(r) * ldc;
+      double acc[BJ];
+      for (int q = 0; q < BJ; ++q) acc[q] = cr[q];
+      for (int k = 0; k < BK; ++k)
+        for (int q = 0; q < BJ; ++q) acc[q] += ar[r][k] * b[static_cast<long>(k) * ldb + q];
+      for (int q = 0; q < BJ; ++q) cr[q] = acc[q];
+    }
+  }
+}
+
 // Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes); upper: only
 // its blocks J ≥ I (B's rows hold sorted column nodes: the loop starts at the first J ≥ I).
 void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
@@ -181,7 +209,16 @@ void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const Spar
   double* c0 = C.valuePtr() + co[s];
   std::fill(c0, c0 + static_cast<long>(bi) * ldc, 0.0);
   for (int q = pc.ptr[I]; q < pc.ptr[I + 1]; ++q) pos[pc.col[q]] = pc.offset[q];
+  constexpr int kAhead = 2;  // B's rows are gathered by A's column nodes: load them early
   for (int k = pa.ptr[I]; k < pa.ptr[I + 1]; ++k) {
+    if (k + kAhead < pa.ptr[I + 1]) {
+      const int Kn = pa.col[k + kAhead], sn = pb.row_start[Kn];
+      const char* row = reinterpret_cast<const char*>(B.valuePtr() + bo[sn]);
+      const long bytes = 8L * (bo[pb.row_start[Kn + 1]] - bo[sn]);
+      for (long c = 0; c < bytes; c += 64) __builtin_prefetch(row + c);
+      __builtin_prefetch(pb.col.data() + pb.ptr[Kn]);
+      __builtin_prefetch(pb.offset.data() + pb.ptr[Kn]);
+    }
     const int K = pa.col[k], sk = pb.row_start[K], bk = pb.rows(K);
     const double* a = A.valuePtr() + ao[s] + pa.offset[k];
     const int ldb = bo[sk + 1] - bo[sk];
@@ -189,11 +226,20 @@ void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const Spar
     const int t0 = upper ? static_cast<int>(std::lower_bound(pb.col.begin() + pb.ptr[K], pb.col.begin() + pb.ptr[K + 1], I) -
                                             pb.col.begin())
                          : pb.ptr[K];
-    for (int t = t0; t < pb.ptr[K + 1]; ++t) {
-      const int J = pb.col[t], bj = pb.cols(J);
-      const double* b = b0 + pb.offset[t];
-      block_madd_any(bi, bk, bj, a, lda, b, ldb, c0 + pos[J], ldc);
-    }
+    const int t1 = pb.ptr[K + 1];
+    // The usual shapes (K's 3×3 times P's 3×6, R's 6×3 times A·P's 3×6, the 6×6 of level 1) with
+    // their sizes known at compile time.
+    if (bi == 3 && bk == 3)
+      row_madd<3, 3, 6>(a, lda, b0, ldb, pb, t0, t1, pos.data(), c0, ldc);
+    else if (bi == 6 && bk == 3)
+      row_madd<6, 3, 6>(a, lda, b0, ldb, pb, t0, t1, pos.data(), c0, ldc);
+    else if (bi == 6 && bk == 6)
+      row_madd<6, 6, 6>(a, lda, b0, ldb, pb, t0, t1, pos.data(), c0, ldc);
+    else
+      for (int t = t0; t < t1; ++t) {
+        const int J = pb.col[t];
+        block_madd_any(bi, bk, pb.cols(J), a, lda, b0 + pb.offset[t], ldb, c0 + pos[J], ldc);
+      }
   }
 }
 }  // namespace
