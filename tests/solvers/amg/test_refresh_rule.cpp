@@ -10,6 +10,8 @@
 #include "solvers/krylov/pcg.hpp"
 #include "test_amg_primal.hpp"
 
+#include "amg_test_support.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,6 +19,9 @@
 
 using namespace xb;
 using namespace xb::amg;
+using xb::test::rel_diff;
+using xb::test::two_cloth_states;
+using xb::test::TwoStates;
 
 TEST(AmgRefreshRule, IterationsPerDecade) {
   EXPECT_DOUBLE_EQ(RefreshRule::rate(4, 1e-2), 2.0);
@@ -56,22 +61,9 @@ TEST(AmgRefreshRule, LagsWhileTheRateStaysWithinTheGrowth) {
   EXPECT_THROW(RefreshRule("fine", 0.9), Error);
 }
 
-namespace {
-double rel_diff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
-
-struct TwoStates {
-  xb::test::PrimalCase a, b;
-};
-const TwoStates& two_states() {
-  static const TwoStates s{xb::test::primal_case("cloth_hang", {{"resolution", "24"}}, 3, 0),
-                           xb::test::primal_case("cloth_hang", {{"resolution", "24"}}, 3, 1)};
-  return s;
-}
-}  // namespace
-
 // The hierarchy's refresh_fine keeps A_1 and renews level 0's smoother and float copy.
 TEST(AmgRefreshRule, RefreshFineKeepsTheCoarseLevels) {
-  const TwoStates& s = two_states();
+  const TwoStates& s = two_cloth_states();
   AmgOptions o;
   o.max_coarse = 50;
   o.drop_tolerance = 0;
@@ -93,7 +85,7 @@ TEST(AmgRefreshRule, RefreshFineKeepsTheCoarseLevels) {
 // mgpbd with each amg.refresh: setup on K1 and a solve (the reference), then a values-only setup
 // on K2: the action it logs, whether the V-cycle changed, and a converged solve of K2.
 TEST(AmgRefreshRule, MgpbdKeepsRefinesOrRefreshes) {
-  const TwoStates& s = two_states();
+  const TwoStates& s = two_cloth_states();
   for (const char* mode : {"full", "fine", "keep"}) {
     Params p;
     p.amg.max_coarse = 50;
@@ -127,7 +119,7 @@ TEST(AmgRefreshRule, MgpbdKeepsRefinesOrRefreshes) {
 // hierarchy set up on K1. Under the double V-cycle (which reads the caller's K) keep refreshes
 // level 0 instead (fine).
 TEST(AmgRefreshRule, KeepLeavesTheFloatVcycleAsItWas) {
-  const TwoStates& s = two_states();
+  const TwoStates& s = two_cloth_states();
   Params p;
   p.amg.max_coarse = 50;
   p.amg.refresh = "keep";
