@@ -24,6 +24,7 @@ from .gpu_kernels import Csr, NodeInverse, make_ops
 # residual norm, and r'z in two slots (the new one is written while the old one is still read).
 SCALE, BNORM, PAP, RNORM, RZ = 0, 1, 2, 3, (4, 5)
 
+
 class Backend:
     """The array module: CuPy (+ cupyx.scipy.sparse) on a device, else NumPy (+ scipy.sparse)."""
 
