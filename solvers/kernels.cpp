@@ -1,5 +1,7 @@
 #include "kernels.hpp"
 
+#include "../core/reduce.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -19,7 +21,8 @@ void row_block(const int* outer, int n, int t, int T, int& lo, int& hi) {
 }
 
 namespace {
-// y = A x, and (Dot) x·y in the same pass.
+// y = A x, and (Dot) x·y in the same pass: over spmv's row blocks cut on the nearest chunk
+// boundaries, so that x·y is summed per fixed chunk (core/reduce.hpp).
 template <bool Dot>
 double spmv_impl(const SparseMatrix& A, const Vector& x, Vector& y) {
   const int n = static_cast<int>(A.rows());
@@ -29,17 +32,28 @@ double spmv_impl(const SparseMatrix& A, const Vector& x, Vector& y) {
   y.resize(n);
   const double* __restrict xp = x.data();
   double* __restrict yp = y.data();
-  double xy = 0;
-#pragma omp parallel reduction(+ : xy)
-  {
-    int lo, hi;
-    row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
-    for (int i = lo; i < hi; ++i) {
-      yp[i] = row_dot(outer, cols, val, xp, i);
-      if constexpr (Dot) xy += xp[i] * yp[i];
+  if constexpr (!Dot) {
+#pragma omp parallel
+    {
+      int lo, hi;
+      row_block(outer, n, omp_get_thread_num(), omp_get_num_threads(), lo, hi);
+      for (int i = lo; i < hi; ++i) yp[i] = row_dot(outer, cols, val, xp, i);
     }
+    return 0;
   }
-  return xy;
+  auto block_start = [&](int t, int T) {
+    int lo, hi;
+    row_block(outer, n, t, T, lo, hi);
+    return lo;
+  };
+  return deterministic_sums_in_blocks<1>(n, block_start, [&](long lo, long hi, double* acc) {
+    double xy = 0;
+    for (int i = static_cast<int>(lo); i < static_cast<int>(hi); ++i) {
+      yp[i] = row_dot(outer, cols, val, xp, i);
+      xy += xp[i] * yp[i];
+    }
+    acc[0] = xy;
+  })[0];
 }
 }  // namespace
 
@@ -64,11 +78,8 @@ void residual(const SparseMatrix& A, const Vector& x, const Vector& b, Vector& r
 }
 
 double dot(const Vector& a, const Vector& b) {
-  const long n = a.size();
-  double s = 0;
-#pragma omp parallel for reduction(+ : s) schedule(static)
-  for (long i = 0; i < n; ++i) s += a[i] * b[i];
-  return s;
+  const double *ap = a.data(), *bp = b.data();
+  return deterministic_sum(a.size(), [&](long i) { return ap[i] * bp[i]; });
 }
 
 void axpy(double a, const Vector& x, Vector& y) {
@@ -78,16 +89,16 @@ void axpy(double a, const Vector& x, Vector& y) {
 }
 
 double cg_update(double alpha, const Vector& p, const Vector& Ap, Vector& x, Vector& r) {
-  const long n = p.size();
-  double rr = 0;
-#pragma omp parallel for reduction(+ : rr) schedule(static)
-  for (long i = 0; i < n; ++i) {
-    x[i] += alpha * p[i];
-    const double ri = r[i] - alpha * Ap[i];
-    r[i] = ri;
-    rr += ri * ri;
-  }
-  return rr;
+  return deterministic_sums<1>(p.size(), [&](long lo, long hi, double* acc) {
+    double rr = 0;
+    for (long i = lo; i < hi; ++i) {
+      x[i] += alpha * p[i];
+      const double ri = r[i] - alpha * Ap[i];
+      r[i] = ri;
+      rr += ri * ri;
+    }
+    acc[0] = rr;
+  })[0];
 }
 
 Vector diagonal(const SparseMatrix& A) {

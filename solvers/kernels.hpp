@@ -1,7 +1,10 @@
 // Parallel (OpenMP) sparse and vector kernels on the raw CSR arrays (32-bit column indices).
 // The matrix kernels split the rows into one contiguous block per thread with about the same
 // number of non-zeros (row_block), so each thread streams its own slice of the values and indices
-// once; none allocates. The fused kernels do two jobs in one pass over their operands.
+// once; none allocates (but for the chunk sums' buffer, once per thread: core/reduce.hpp). The
+// fused kernels do two jobs in one pass over their operands. Every sum
+// (dot, spmv_dot, cg_update) is taken over core/reduce.hpp's fixed chunks: the same bits for any
+// thread count (spmv_dot's row blocks are cut on chunk boundaries for that).
 #pragma once
 
 #include "../core/sparse.hpp"

@@ -8,7 +8,9 @@
   only the sub-layers after it;
 - size: no C++ source or header and no Python file over 400 lines, no C++ function body over 80 lines;
 - no include loops: a unit (NAME.hpp with NAME.cpp) never reaches itself through the includes;
-- tests mirror the source: every .cpp under a folder of MIRRORED has tests/<folder>/test_<name>.cpp.
+- tests mirror the source: every .cpp under a folder of MIRRORED has tests/<folder>/test_<name>.cpp;
+- determinism: no OpenMP reduction(+ : …) (or − or *) over a double or a float outside tests/: its
+  rounding depends on the thread count (sums go through core/reduce.hpp, docs/determinism.md).
 
 usage: python3 tests/test_layout.py [--root DIR] [--report]   (--report lists, never fails)
 """
@@ -175,6 +177,26 @@ def long_functions(root, path):
     return out
 
 
+FP_REDUCTION = re.compile(r"#\s*pragma\s+omp\s+(?!simd)[^\n]*\breduction\s*\(\s*[-+*]\s*:\s*([\w\s,]+)\)")
+
+
+def float_reductions(root, path):
+    """OpenMP +, − or * reductions whose variable is declared double or float in the 20 lines above."""
+    with open(path, encoding="utf-8") as fh:
+        lines = fh.read().split("\n")
+    found = []
+    for i, line in enumerate(lines):
+        m = FP_REDUCTION.search(line)
+        if not m:
+            continue
+        for var in (v.strip() for v in m.group(1).split(",")):
+            decl = re.compile(rf"\b(?:double|float)\b[^;()]*\b{re.escape(var)}\b")
+            if any(decl.search(x) for x in lines[max(0, i - 20):i]):
+                found.append(f"{os.path.relpath(path, root)}:{i + 1}: reduction over the floating-point '{var}': "
+                             "its rounding depends on the thread count (use core/reduce.hpp)")
+    return found
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--root", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -193,6 +215,8 @@ def main():
             continue
         problems += layer_violations(a.root, path)
         problems += long_functions(a.root, path)
+        if not os.path.relpath(path, a.root).startswith("tests"):
+            problems += float_reductions(a.root, path)
     for p in problems:
         print(p)
     print(f"layout: {len(problems)} problem(s)")

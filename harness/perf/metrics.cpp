@@ -2,8 +2,8 @@
 // For a fixed set of small captured systems and short scenes it records what does not depend
 // on the machine's load: iterations to tolerance of every registered linear solver, AMG levels
 // and operator/grid complexity (LinearSolver::statistics()), outer iterations per substep of
-// every method, and the status of each. It runs single-threaded by default so that parallel
-// reductions cannot change an iteration count between machines. Output: one JSON object
+// every method, and the status of each. It runs single-threaded by default; the counts are the
+// same for any thread count (docs/determinism.md). Output: one JSON object
 // (scripts/perf.py merges it with the Google Benchmark timings and compares with the baseline).
 //
 //   xb_perf_metrics [--set key=value]... [--methods a,b,...] [--only linear|sim] [--cases l1,l2,...]

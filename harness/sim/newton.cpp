@@ -2,6 +2,8 @@
 
 #include "residual_energy.hpp"
 
+#include "../../core/reduce.hpp"
+
 #include <cmath>
 #include <limits>
 
@@ -23,11 +25,7 @@ void eliminate_multipliers(const ConstraintState& s, const Eigen::VectorXd& alph
 
 double particle_dot(const Problem& prob, const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
   const Eigen::VectorXd& w = prob.particles.w;
-  double sum = 0;
-#pragma omp parallel for reduction(+ : sum) schedule(static)
-  for (int p = 0; p < static_cast<int>(a.cols()); ++p)
-    if (w[p] > 0) sum += a.col(p).dot(b.col(p));
-  return sum;
+  return deterministic_sum(a.cols(), [&](long p) { return w[p] > 0 ? a.col(p).dot(b.col(p)) : 0.0; });
 }
 
 double energy_gradient_norm(const Problem& prob, const DualSystem& ds, const ConstraintState& s,

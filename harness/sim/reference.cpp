@@ -4,6 +4,7 @@
 #include "residual_energy.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/reduce.hpp"
 
 #include <cmath>
 
@@ -184,11 +185,8 @@ ReferenceSolution ReferenceSolver::solve_xpbd(const Eigen::Matrix3Xd& x_pred) {
 
 double mass_norm_distance(const Problem& prob, const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
   const Eigen::VectorXd& w = prob.particles.w;
-  double sum = 0;
-#pragma omp parallel for reduction(+ : sum) schedule(static)
-  for (int p = 0; p < static_cast<int>(a.cols()); ++p)
-    if (w[p] > 0) sum += (a.col(p) - b.col(p)).squaredNorm() / w[p];
-  return std::sqrt(sum);
+  return std::sqrt(
+      deterministic_sum(a.cols(), [&](long p) { return w[p] > 0 ? (a.col(p) - b.col(p)).squaredNorm() / w[p] : 0.0; }));
 }
 
 }  // namespace xb

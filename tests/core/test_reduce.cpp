@@ -4,6 +4,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -55,6 +56,26 @@ TEST(DeterministicSum, SeveralSumsInOnePass) {
   });
   EXPECT_TRUE(same_bits(two[0], chunked_by_hand(v)));
   EXPECT_TRUE(same_bits(two[1], chunked_by_hand(sq)));
+}
+
+TEST(DeterministicSum, BlocksOfAnotherMeasureCutOnChunkBoundaries) {
+  // Thread blocks that start anywhere (here: skewed towards the end, as SpMV's blocks of equal
+  // non-zeros are on rows that grow): each chunk is still summed whole, so the sums are the
+  // definition's for any thread count, and every index is visited once.
+  const long n = 50000;
+  const std::vector<double> v = random_terms(n);
+  auto skewed = [&](int t, int T) { return static_cast<long>(n * std::sqrt(static_cast<double>(t) / T)); };
+  const int saved = omp_get_max_threads();
+  for (int t : {1, 2, 3, 4, 7, 16}) {
+    omp_set_num_threads(t);
+    std::vector<int> visits(n, 0);
+    const auto s = xb::deterministic_sums_in_blocks<1>(n, skewed, [&](long lo, long hi, double* acc) {
+      for (long i = lo; i < hi; ++i) acc[0] += v[i], ++visits[i];
+    });
+    EXPECT_TRUE(same_bits(s[0], chunked_by_hand(v))) << t << " threads";
+    EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), n) << t << " threads";
+  }
+  omp_set_num_threads(saved);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 """mgpbd's solve phase in Python (python/xpbd_bench/gpu.py) on NumPy, as CI runs it: the exported
 hierarchy is the C++ one (its V-cycle equals Hierarchy::vcycle), a refresh equals a fresh setup,
-py:mgpbd-gpu takes C++ mgpbd's PCG iterations (±1) on captured cloth, bar and squash systems in
+py:mgpbd-gpu takes C++ mgpbd's PCG iterations (±5 %, at least 1) on captured cloth, bar and squash systems in
 both forms, and gpu_bench runs end to end from the Python files alone."""
 import json
 import os
@@ -36,6 +36,14 @@ def form_system(s, form):
 
 def rel(a, b):
     return np.linalg.norm(a - b) / np.linalg.norm(b)
+
+
+def close_iterations(a, b):
+    """PCG iteration counts of two correct implementations (float V-cycles rounding differently):
+    the order of C++ mgpbd's own sums alone moved its count by 3 of 93 (squash, primal form, dual
+    stop) and 2 of 76 (cloth, dual form) between thread counts before those sums were made
+    deterministic (docs/determinism.md): 5 %, at least 1."""
+    return abs(int(a) - int(b)) <= max(1, 0.05 * max(a, b))
 
 
 @pytest.mark.parametrize("name", list(SCENES))
@@ -109,27 +117,30 @@ def test_py_mgpbd_gpu_takes_mgpbds_iterations(systems, name, tmp_path):
     for form in ("dual", "primal"):
         c, p = by[("mgpbd", form)], by[("py:mgpbd-gpu", form)]
         assert c["attrs"]["status"] == p["attrs"]["status"] == "ok", (c["attrs"]["message"], p["attrs"]["message"])
-        assert abs(c["attrs"]["iterations"] - p["attrs"]["iterations"]) <= 1, (form, c["attrs"]["iterations"],
-                                                                              p["attrs"]["iterations"])
+        assert close_iterations(c["attrs"]["iterations"], p["attrs"]["iterations"]), (form, c["attrs"]["iterations"],
+                                                                                     p["attrs"]["iterations"])
         assert c["attrs"]["iterations"] > 3
         # The logged residual is the dual one in both forms: at 1e-8 in the dual, where K's
-        # residual at 1e-8 leaves it in the primal, the same for both.
+        # residual at 1e-8 leaves it in the primal (~1e-4 here, four decades above K's own), the
+        # same for both up to round-off: what a stop on another norm leaves depends on the last
+        # iterate's rounding (C++ alone gave 0.90e-4 to 1.20e-4 between thread counts before its
+        # sums were made deterministic, Python 0.83e-4): within a factor 2.
         res_c, res_p = c["attrs"]["final_relative_residual"], p["attrs"]["final_relative_residual"]
-        assert res_p <= 1e-8 if form == "dual" else abs(res_p / res_c - 1) < 0.2
+        assert res_p <= 1e-8 if form == "dual" else 0.5 < res_p / res_c < 2, (form, res_c, res_p)
         assert c["attrs"]["single_precision"] == 1  # the float V-cycle on both
     assert len(solver.iterations) == 2
 
 
 def test_py_mgpbd_gpu_races_inside_the_stepper(tmp_path):
     # Two frames of the cloth in the dual form: the same outer iterations and PCG iterations per
-    # solve (±1) as mgpbd, with mgpbd's lazy setup (refreshes between the full setups).
+    # solve (±5 %, at least 1) as mgpbd, with mgpbd's lazy setup (refreshes between the full setups).
     g = gpu.MgpbdGpu(backend="numpy", **AMG)
     c, p = xb.run("cloth_hang", solvers=["mgpbd", g], out=tmp_path / "r.h5", frames=2, form="dual",
                   set=dict(AMG, resolution=12, **{"linear.forcing": "fixed"}))
     assert c["attrs"]["status"] == p["attrs"]["status"] == "ok"
     assert c["attrs"]["outer_iterations"] == p["attrs"]["outer_iterations"] >= 3
     its_c, its_p = c["data"]["linear_iterations"], p["data"]["linear_iterations"]
-    assert len(its_c) == len(its_p) and np.all(np.abs(its_c - its_p) <= 1), (its_c, its_p)
+    assert len(its_c) == len(its_p) and all(map(close_iterations, its_c, its_p)), (its_c, its_p)
     assert list(p["data"]["linear_setup_action"]) == list(c["data"]["linear_setup_action"])
     assert g.refreshes > 0 and g.setups == list(c["data"]["linear_setup_action"]).count("setup")
 
@@ -144,10 +155,8 @@ def test_primal_pcg_on_the_dual_residual_takes_mgpbds_iterations(systems, tmp_pa
     dh = gpu.DeviceHierarchy(xb.amg_hierarchy(s.K, 3, s.rigid_modes, set=AMG).export(), NUMPY)
     x, its, status = gpu.pcg(Csr(np, s.K, np.float64), np.asarray(s.f), dh.vcycle, 1e-6, 1000, NUMPY.ops,
                              dual_map=Csr(np, G, np.float64), dual_scale=bn)
-    # Within 5%: the float V-cycles round differently, and at ~90 iterations to 1e-6 C++ mgpbd's own
-    # count moves by 3 between 1 and 2 OpenMP threads (90 / 93 on main before issue 37's sums).
     cpp = runs[0]["attrs"]["iterations"]
-    assert status == "converged" and abs(its - cpp) <= max(1, 0.05 * cpp), (its, cpp)
+    assert status == "converged" and close_iterations(its, cpp), (its, cpp)
     assert np.linalg.norm(G @ (s.f - s.K @ x)) / bn <= 1e-6
 
 

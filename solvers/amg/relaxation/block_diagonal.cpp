@@ -3,6 +3,7 @@
 #include "lanczos.hpp"
 
 #include "../../../core/error.hpp"
+#include "../../../core/reduce.hpp"
 #include "../../kernels.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -89,12 +90,12 @@ double estimate_lambda_max(const SparseMatrix& A, const BlockDiagonal& D, Vector
   // Each one parallel pass over the node blocks, no temporaries: xᵀDx, and D⁻¹Aq − a·q − β·q_prev.
   const int nn = D.num_nodes();
   auto dnorm = [&](const Vector& x) {
-    double s = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (n > kMinParallelRows)
-    for (int I = 0; I < nn; ++I) {
+    const double s = deterministic_sum(nn, [&](long I) {
       const int s0 = D.node_begin(I), b = D.node_end(I) - s0;
-      for (int r = 0; r < b; ++r) s += x[s0 + r] * block_row(D.block(I), b, x.data() + s0, r);
-    }
+      double xDx = 0;
+      for (int r = 0; r < b; ++r) xDx += x[s0 + r] * block_row(D.block(I), b, x.data() + s0, r);
+      return xDx;
+    });
     return std::sqrt(std::max(0.0, s));
   };
   auto step = [&](const Vector& Aq, const Vector& q, const Vector& q_prev, double a, double beta, Vector& w) {

@@ -1,5 +1,6 @@
 #include "lanczos.hpp"
 
+#include "../../../core/reduce.hpp"
 #include "../../kernels.hpp"
 #include "../block_kernels.hpp"
 
@@ -76,10 +77,7 @@ double estimate_lambda_max(const SparseMatrix& A, const Vector& inv_diag, Vector
     gershgorin = std::max(gershgorin, inv_diag[i] * row);
   }
   auto dnorm = [&](const Vector& x) {
-    double s = 0;
-#pragma omp parallel for schedule(static) reduction(+ : s) if (n > kMinParallelRows)
-    for (long i = 0; i < n; ++i) s += inv_diag[i] > 0 ? x[i] * x[i] / inv_diag[i] : 0.0;
-    return std::sqrt(s);
+    return std::sqrt(deterministic_sum(n, [&](long i) { return inv_diag[i] > 0 ? x[i] * x[i] / inv_diag[i] : 0.0; }));
   };
   auto step = [&](const Vector& Aq, const Vector& q, const Vector& q_prev, double a, double beta, Vector& w) {
 #pragma omp parallel for schedule(static) if (n > kMinParallelRows)

@@ -13,8 +13,9 @@ import subprocess
 import sys
 import tempfile
 
-# ~2 s here (34 outer iterations of a direct solve): several redraws, one every 0.25 s.
-RUN = ["run", "--scene", "squash", "--set", "resolution=10", "--frames", "2", "--solver", "cholmod"]
+# Several redraws, one every 0.25 s: six frames of a direct solve, ~2 s on a quiet machine (two
+# frames took 0.73 s there on one thread: two redraws, too few).
+RUN = ["run", "--scene", "squash", "--set", "resolution=10", "--frames", "6", "--solver", "cholmod"]
 REDRAW = "\r\x1b[K"
 
 
@@ -44,7 +45,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "r.h5")
         rc, text = on_terminal([args.binary, *RUN, "--out", out])
-        updates = [u for u in text.split(REDRAW)[1:] if re.search(r"frame \d/2, iteration \d+, .*ETA \d+:\d\d", u)]
+        updates = [u for u in text.split(REDRAW)[1:] if re.search(r"frame \d/6, iteration \d+, .*ETA \d+:\d\d", u)]
         if rc != 0 or len(updates) < 3:
             failures.append(f"terminal: exit {rc}, {len(updates)} status lines with an ETA (want >= 3):\n{text!r}")
         if not re.search(r"\r\x1b\[Krun: squash with cholmod \.\.\. (ok|max_iterations) \(", text):

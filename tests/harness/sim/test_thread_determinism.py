@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""Results that do not depend on the thread count (docs/determinism.md), a ctest: a representative
+set of runs, each at OMP_NUM_THREADS = 1, 2, 3 and 4 (one process per thread count), compared
+record by record, bit for bit: every attribute and every dataset of every run, except the keys
+that say when, how fast or on how many threads a run ran (EXCLUDED, each with its reason).
+
+The set: every in-house method (xpbd-jacobi, xpbd-authors, xpbd-gs, cg, jacobi-pcg, mgpbd) on a
+tet scene (squash) and on the cloth, the global ones in both forms; mgpbd with the float and the
+double V-cycle over two frames (setups and refreshes); a Newton run with --reference; a captured
+system solved in both forms. Sizes are chosen so that every vector spans several of
+core/reduce.hpp's chunks of 4096 indices and every parallel loop runs on all threads (above
+kMinParallelRows = 2048).
+
+usage: python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench [--threads 1,2,3,4]
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+# The keys left out of the comparison, each with why it may differ between two runs of the same
+# problem and settings; every other attribute and dataset must be the same bits.
+EXCLUDED = {
+    # clocks: how long something took, or when
+    "wall_time": "s, measured (attribute: the run; dataset: per entry)",
+    "step_time": "s, measured",
+    "fill_time": "s, measured",
+    "linear_setup_time": "s, measured",
+    "linear_solve_time": "s, measured",
+    "linear_history/time": "s since each linear solve began, measured",
+    "setup_time_total": "s, measured (mgpbd's statistics)",
+    "refresh_time_total": "s, measured (mgpbd's statistics)",
+    "reference_time": "s, measured (--reference)",
+    "setup_time": "s, measured (solve)",
+    "solve_time": "s, measured (solve)",
+    "time": "s since the solve began, per iteration, measured (solve)",
+    "created": "the UTC date and time of the run",
+    # the machine's state and the thread count, which is what the test varies
+    "load_average": "the 1-minute load at the process's start",
+    "omp_threads": "OpenMP's thread count: what the test varies",
+}
+
+
+# Each case is one command, run once per thread count ({sys}: the system `capture` writes first).
+RUN = ["run", "--set", "max_iterations=2", "--quiet"]
+SQUASH = ["--scene", "squash", "--set", "resolution=14"]  # 1,983 particles: dual 8,832 rows, primal 5,949
+CAPTURE = ["capture", *SQUASH, "--frame", "0", "--iteration", "1", "--quiet"]
+CASES = [
+    # a tet scene: every in-house method, the global ones in both forms
+    ("squash", [*RUN, *SQUASH, "--frames", "1", "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg",
+                "--form", "dual,primal"]),
+    # mgpbd with the float and the double V-cycle; two frames: setups, then refreshes (the dual form
+    # refreshes from the second outer iteration on, the primal from the second frame)
+    ("squash_mgpbd", [*RUN, *SQUASH, "--frames", "2", "--solver", "mgpbd", "--form", "dual,primal"]),
+    ("squash_mgpbd_double", [*RUN, *SQUASH, "--frames", "2", "--solver", "mgpbd", "--form", "dual,primal",
+                             "--set", "amg.precision=double"]),
+    # the cloth, 64 x 64 particles: primal 12,288 rows
+    ("cloth", [*RUN, "--frames", "1", "--scene", "cloth_hang", "--set", "resolution=63",
+               "--solver", "xpbd-jacobi,xpbd-gs,xpbd-authors,cg,jacobi-pcg,mgpbd", "--form", "dual,primal"]),
+    # the Newton step, with the reference solution of the time step beside it
+    ("newton", [*RUN, *SQUASH, "--frames", "1", "--profile", "newton", "--solver", "mgpbd", "--form", "primal",
+                "--reference"]),
+    # the linear level: one captured system solved to 1e-6 (xpbd_bench.solve takes this path too)
+    ("solve", ["solve", "--system", "{sys}", "--solver", "cg,jacobi-pcg,mgpbd", "--form", "dual,primal",
+               "--tol", "1e-6", "--quiet"]),
+]
+
+
+def excluded(key):
+    return key in EXCLUDED
+
+
+def records(path):
+    """{run name: {key: value}} with every attribute and dataset of every run group."""
+    out = {}
+    with h5py.File(path, "r") as f:
+        for name, g in f["runs"].items():
+            rec = {f"@{k}": v for k, v in g.attrs.items()}
+
+            def visit(key, obj):
+                if isinstance(obj, h5py.Dataset):
+                    rec[key] = obj[()]
+
+            g.visititems(visit)
+            out[name] = rec
+    return out
+
+
+def same_bits(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    if a.dtype != b.dtype or a.shape != b.shape:
+        return False
+    if a.dtype.kind in "fiub":
+        return a.tobytes() == b.tobytes()
+    return bool(np.all(a == b))
+
+
+def compare(ref, other, label):
+    """Every difference between two files' records, one line each."""
+    diffs = []
+    if sorted(ref) != sorted(other):
+        return [f"{label}: runs {sorted(other)} against {sorted(ref)}"]
+    for run in ref:
+        a, b = ref[run], other[run]
+        keys = sorted(k for k in set(a) | set(b) if not excluded(k.lstrip("@")))
+        bad = [k for k in keys if k not in a or k not in b or not same_bits(a[k], b[k])]
+        if bad:
+            diffs.append(f"{label}: {run}: {len(bad)} of {len(keys)} keys differ: {' '.join(bad)}")
+    return diffs
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--binary", required=True)
+    ap.add_argument("--threads", default="1,2,3,4")
+    ap.add_argument("--only", default="", help="comma-separated case names")
+    args = ap.parse_args()
+    threads = [int(t) for t in args.threads.split(",")]
+    only = set(filter(None, args.only.split(",")))
+    failures, compared = [], 0
+    with tempfile.TemporaryDirectory() as tmp:
+        system = os.path.join(tmp, "system")
+        proc = subprocess.run([args.binary, *CAPTURE, "--out", system], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE, text=True)
+        if proc.returncode != 0:
+            sys.exit(f"capture: exit {proc.returncode}: {proc.stderr.strip()}")
+        for name, command in CASES:
+            if only and name not in only:
+                continue
+            command = [a.replace("{sys}", system + ".h5") for a in command]
+            files = {}
+            for t in threads:
+                out = os.path.join(tmp, f"{name}_{t}.h5")
+                env = dict(os.environ, OMP_NUM_THREADS=str(t))
+                proc = subprocess.run([args.binary, *command, "--out", out], env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.PIPE, text=True)
+                if proc.returncode != 0:
+                    failures.append(f"{name} at {t} threads: exit {proc.returncode}: {proc.stderr.strip()}")
+                    break
+                files[t] = records(out)
+            if len(files) < len(threads):
+                continue
+            base = files[threads[0]]
+            for t in threads[1:]:
+                failures += compare(base, files[t], f"{name}, {threads[0]} vs {t} threads")
+            compared += len(base)
+            print(f"{name}: {len(base)} runs at {threads} threads compared", flush=True)
+    for f in failures:
+        print("FAIL:", f)
+    if failures:
+        sys.exit(1)
+    print(f"thread determinism: {compared} runs, bitwise equal at {threads} threads")
+
+
+if __name__ == "__main__":
+    main()
