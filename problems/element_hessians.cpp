@@ -69,33 +69,43 @@ void ElementHessians::fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const 
   }
 }
 
-void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
-                                         ConstraintState* state) {
+void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde,
+                                          const ElementProjection& proj, ConstraintState* state) {
   const int m = prob_.num_constraints(), nd = static_cast<int>(prob_.distance.size());
   for (int j = 0; j < m; ++j)
     if (!(alpha_tilde[j] > 0))
       throw Error("energy Hessian: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
                   " (E = sum C^2/(2 alpha) needs every alpha~ > 0)");
   blocks_.resize(nd, static_cast<int>(prob_.tets.size()));
+  smallest_.resize(m);
   if (state) {
     state->C.resize(m);
     state->grad.resize(m);
   }
-#pragma omp parallel for schedule(static)
+  int indefinite = 0, projected = 0;  // integer counts: any order gives the same sums
+#pragma omp parallel for schedule(static) reduction(+ : indefinite, projected)
   for (int j = 0; j < m; ++j) {
     double* C = state ? &state->C[j] : nullptr;
     std::array<Eigen::Vector3d, 4>* g = state ? &state->grad[j] : nullptr;
+    const Projection pj = proj.base;
     if (j < nd) {
       const auto& e = prob_.distance.idx[j];
-      blocks_.matrix(j) = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j],
-                                                        alpha_tilde[j], proj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr);
+      blocks_.matrix(j) = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j], alpha_tilde[j],
+                                                  pj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr, &smallest_[j],
+                                                  proj.tolerance);
       if (g) (*g)[2].setZero(), (*g)[3].setZero();
     } else {
       const auto& e = prob_.tets.idx[j - nd];
       blocks_.matrix(j) = tet_energy_hessian(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
-                                      alpha_tilde[j], proj, C, g);
+                                             alpha_tilde[j], pj, C, g, &smallest_[j], proj.tolerance);
+    }
+    if (smallest_[j] < 0) {
+      ++indefinite;
+      if (pj != Projection::none && smallest_[j] * alpha_tilde[j] < -proj.tolerance) ++projected;
     }
   }
+  indefinite_ = indefinite;
+  projected_ = projected;
 }
 
 void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda,

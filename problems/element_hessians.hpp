@@ -50,6 +50,15 @@ class ElementMatrices {
   std::vector<double> values_;
 };
 
+// How fill_energy_hessian projects the elements: by `base`, but only those whose smallest exact
+// eigenvalue is below −tolerance in units of their own stiffness 1/α̃_j (ψ < −tolerance for a tet;
+// 0: every indefinite element). The progressive strategy (harness/sim/hessian_projection.hpp)
+// leaves the mildly indefinite elements exact this way.
+struct ElementProjection {
+  Projection base = Projection::clamp;
+  double tolerance = 0;
+};
+
 class ElementHessians {
  public:
   // Keeps a reference to prob (its constraints and masses; positions are passed in).
@@ -61,8 +70,18 @@ class ElementHessians {
   // With `state`, also evaluate_constraints(prob, x, *state) from the same SVDs (identical values),
   // so a Newton iteration needs one pass over the constraints, not two.
   void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
+                           ConstraintState* state = nullptr) {
+    fill_energy_hessian(x, alpha_tilde, ElementProjection{proj, 0}, state);
+  }
+  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, const ElementProjection& proj,
                            ConstraintState* state = nullptr);
   const ElementMatrices& blocks() const { return blocks_; }
+  // After fill_energy_hessian, per constraint: the smallest eigenvalue of its exact (unprojected)
+  // H_j in the closed-form eigenbasis (problems/constraint_hessian.hpp); negative: indefinite.
+  const std::vector<double>& smallest_eigenvalues() const { return smallest_; }
+  // Of the last fill: elements with a negative eigenvalue, and those among them it projected.
+  int indefinite_elements() const { return indefinite_; }
+  int projected_elements() const { return projected_; }
 
   // §1.4's diagonal: kd(:, p) = max(0, the diagonal of Σ_j π(G_j)'s (p, p) block) per dof, for every
   // particle (pinned ones 0). proj = none sums the exact blocks and clamps the sums; clamp/abs sum
@@ -75,6 +94,8 @@ class ElementHessians {
   ElementMatrices blocks_;
   std::vector<std::array<Eigen::Vector3d, 4>> diag_;  // per constraint and slot: its block's diagonal
   std::vector<int> inc_start_, inc_;                   // particle → (constraint << 2 | slot)
+  std::vector<double> smallest_;
+  int indefinite_ = 0, projected_ = 0;
 };
 
 // Per-dof inverse masses of M̃ = M + K̃_d: w_dof(d, p) = 1/(1/w_p + kd(d, p)), 0 where w_p = 0.

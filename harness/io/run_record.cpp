@@ -146,6 +146,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["step_length"] = L.step_length;
     r.datasets["line_search_trials"] = L.line_search_trials;
     r.datasets["exact_hessian"] = L.exact_hessian;
+    r.datasets["projected_elements"] = L.projected_elements;
     r.datasets["fill_time"] = L.fill_time;
     r.datasets["linear_iterations"] = L.linear_iterations;
     r.datasets["linear_setup_time"] = L.linear_setup_time;
@@ -157,6 +158,11 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["linear_history/time"] = L.linear_history_time;
     r.datasets["linear_history/offset"] = L.linear_history_offset;
   }
+  r.datasets["substep_status"] = L.substep_status;
+  if (!L.relative_gradient_floor.empty()) {  // step = newton
+    r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;
+    r.datasets["active_bounds"] = L.active_bounds;
+  }
   if (!L.reference_status.empty()) {
     // The reference of every substep (harness/sim/reference.hpp) and the error against it.
     r.attrs["reference_method"] = res.reference_method;
@@ -164,7 +170,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     long long unconverged = 0;
     for (size_t i = 0; i < L.reference_status.size(); ++i) {
       worst = std::max(worst, L.reference_relative_dual_residual[i]);
-      if (L.reference_status[i] != "converged") ++unconverged;
+      if (L.reference_status[i] != "converged" && L.reference_status[i] != "rounding_floor") ++unconverged;
     }
     r.attrs["reference_dual_residual"] = worst;
     r.attrs["reference_substeps_unconverged"] = unconverged;
@@ -173,6 +179,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
     r.datasets["reference/iterations"] = L.reference_iterations;
     r.datasets["reference/status"] = L.reference_status;
+    r.datasets["reference/time"] = L.reference_time;
     if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
   }
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
