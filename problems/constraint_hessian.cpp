@@ -153,8 +153,13 @@ Eigen::Matrix<double, 12, 9> modes_in_x(const ArapEigensystem& es, const Eigen::
 Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
                          const Eigen::Matrix<double, 4, 3>& B) {
   const Eigen::Matrix<double, 12, 9> W = modes_in_x(es, B);
-  const Matrix12d H = W * mu.asDiagonal() * W.transpose();
-  return (H + H.transpose()) * 0.5;  // exactly symmetric: K's blocks (p, q) and (q, p) stay transposes
+  const Eigen::Matrix<double, 12, 9> Wmu = W * mu.asDiagonal();
+  // The upper triangle only, mirrored: exactly symmetric (K's blocks (p, q) and (q, p) stay
+  // transposes) at 78 of the 144 dot products.
+  Matrix12d H;
+  for (int c = 0; c < 12; ++c)
+    for (int r = 0; r <= c; ++r) H(r, c) = H(c, r) = Wmu.row(r).dot(W.row(c));
+  return H;
 }
 
 Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
