@@ -40,12 +40,14 @@ FIGURES_SIZE ?= default
 figures: build
 	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
-# The simulation-level race (figures/race/race.toml): every method at its best, per frame, one
-# process per run, into plots/race/ (race_<scene>.png, race_<scene>_variants.png,
-# race_crossover.png, summary.md; docs/race.md). `race`: one size per scene (the spec's
-# quick_size; ~15 minutes on 2 cores); `race-full`: every size of the spec (squash to 850K tets:
-# hours). Both resume (finished runs are kept); RACE_ARGS="--fresh", "--only squash",
-# "--methods mgpbd,cholmod".
+# The race on the truth (figures/race/race.toml, docs/race.md): outer methods (XPBD, its two
+# variants, Newton) x linear methods, one process per run, each with --reference; the time to a
+# position error of 1e-2 and 1e-4 against the backward-Euler solution, into plots/race/
+# (race_<scene>.png, summary.md, timings.tsv). `race`: one size per scene (the spec's quick_size)
+# and Eisenstat-Walker only (10-20 minutes on a quiet 2-core machine, references included);
+# `race-full`: every size and forcing rule (squash to 850K tets: hours). Both resume (finished runs
+# are kept); RACE_ARGS="--fresh", "--only squash", "--outer newton", "--linear mgpbd,cholmod".
+# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md
 RACE_ARGS ?=
 race: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --quick $(RACE_ARGS)

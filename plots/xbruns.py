@@ -73,6 +73,27 @@ def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "rela
     return runs
 
 
+# The reference's records (results/README.md, run --reference): what a plot needs to judge it.
+REFERENCE_DATASETS = ("reference/status", "reference/relative_energy_gradient", "reference/relative_dual_residual")
+
+
+def reference_verdict(run, index=0):
+    """Whether the run's reference converged in substep `index` of the run (0: its first), the
+    one place the plots read that: (True, "") or (False, why), e.g. "stagnated at ‖∇E‖ 0.00025 of
+    its start". Needs REFERENCE_DATASETS loaded; a run without them has no verdict (False)."""
+    d = run.get("data", {}) if run else {}
+    st = d.get("reference/status")
+    if st is None or len(st) <= index:
+        return False, "no reference recorded"
+    if str(st[index]) in ("converged", "rounding_floor"):  # the floor: as far as rounding allows
+        return True, ""
+    why = str(st[index])
+    g = d.get("reference/relative_energy_gradient")
+    if g is not None and len(g) > index:
+        why += f" at ‖∇E‖ {float(g[index]):.2g} of its start"
+    return False, why
+
+
 METRICS = ("true", "authors")
 
 

@@ -7,7 +7,9 @@ usage: python3 scripts/newton_claims.py tournier | chen | macklin | omega | mgpb
 tournier  heavy_rope and pendulum (problems/scenes/), variants none, mu1e12, mass_ratio_1e4,
           dt_30hz; XPBD with xpbd.geometric_stiffness none | diagonal | full and Newton, cholmod,
           --reference (Newton's): status, outer iterations, worst final position error and
-          relative Newton residual of any substep, the light particles' largest speed.
+          relative Newton residual of any substep; and Tournier's claim itself, stability: the
+          light particles' largest speed after the last frame (--save-state) and the largest
+          distance of any particle from where Newton's trajectory ends (30 frames).
 chen      squash (--mesh) and twist_bar 7e9 (resolution 6), cholmod, 100 outer iterations with
           xpbd.primal_residual zero | keep: the relative Newton and dual residuals over iterations.
 macklin   mass_chain (256 links, masses graded to mass_ratio), dual against primal form with
@@ -32,11 +34,15 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, "problems", "scenes")
 
 
-def run(args, name, scene, solver, sets=(), profile=None, reference=False):
+def run(args, name, scene, solver, sets=(), profile=None, reference=False, state_frame=None):
+    """One run in its own process; with state_frame, data["velocities"] holds v after that frame."""
     out = os.path.join(args.out, name + ".h5")
-    if os.path.exists(out):
-        os.remove(out)
+    state = os.path.join(args.out, name + ".state.h5")
+    for f in (out, state):
+        if os.path.exists(f):
+            os.remove(f)
     cmd = [args.bench, "run", "--scene", scene, "--solver", solver, "--out", out, "--quiet"]
+    cmd += ["--save-state", state, "--frame-of-state", str(state_frame)] if state_frame is not None else []
     cmd += ["--profile", profile] if profile else []
     cmd += ["--reference"] if reference else []
     for s in sets:
@@ -50,6 +56,9 @@ def run(args, name, scene, solver, sets=(), profile=None, reference=False):
         data = {k: np.array(r[k]) for k in ("iteration", "relative_newton_residual", "relative_dual_residual",
                                              "position_error", "linear_iterations", "wall_time", "final_positions")
                 if k in r}
+    if state_frame is not None and os.path.exists(state):
+        with h5py.File(state) as f:
+            data["velocities"] = np.array(f["velocities"]).reshape(-1, 3)
     return attrs, data
 
 
@@ -59,22 +68,41 @@ def substep_ends(data):
     return [i for i in range(len(it)) if i + 1 == len(it) or it[i + 1] == 0]
 
 
+TOURNIER_FRAMES = 30  # the scenes' own (half a second)
+
+
+def stability(d, newton_end):
+    """The light particles' largest speed after the last frame (every free particle but the heavy
+    last one; the first is pinned) and the largest distance of a particle from Newton's end."""
+    v = d.get("velocities")
+    speed = float(np.max(np.linalg.norm(v[1:-1], axis=1))) if v is not None else float("nan")
+    x = d["final_positions"].reshape(-1, 3)
+    drift = float(np.max(np.linalg.norm(x - newton_end, axis=1))) if newton_end is not None else float("nan")
+    return speed, drift
+
+
 def tournier(args):
-    print("| scene | variant | outer method | status | outer its | worst position error | worst rel. Newton res. |")
-    print("|---|---|---|---|---|---|---|")
+    print("| scene | variant | outer method | status | outer its | worst position error | worst rel. Newton res. | "
+          "light particles' end speed m/s | distance from Newton's end m |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for scene in ("heavy_rope", "pendulum"):
         for variant in ("none", "mu1e12", "mass_ratio_1e4", "dt_30hz"):
-            for method in ("none", "diagonal", "full", "newton"):
+            newton_end = None
+            for method in ("newton", "none", "diagonal", "full"):  # Newton first: the others' distance from it
                 sets = [f"variant={variant}"]
                 sets += [f"xpbd.geometric_stiffness={method}"] if method != "newton" else []
                 a, d = run(args, f"t_{scene}_{variant}_{method}", scene, "cholmod", sets,
-                           profile="newton" if method == "newton" else None, reference=True)
+                           profile="newton" if method == "newton" else None, reference=True,
+                           state_frame=TOURNIER_FRAMES - 1)
                 ends = substep_ends(d) if "iteration" in d else []
                 pe = max((d["position_error"][i] for i in ends), default=float("nan")) if "position_error" in d else float("nan")
                 nr = max((d["relative_newton_residual"][i] for i in ends), default=float("nan"))
+                speed, drift = stability(d, newton_end)
+                if method == "newton":
+                    newton_end = d["final_positions"].reshape(-1, 3)
                 label = "Newton" if method == "newton" else f"XPBD, {method}"
                 print(f"| {scene} | {variant} | {label} | {a.get('status')} | {a.get('outer_iterations')} | "
-                      f"{pe:.2e} | {nr:.2e} |", flush=True)
+                      f"{pe:.2e} | {nr:.2e} | {speed:.3g} | {'—' if method == 'newton' else f'{drift:.3g}'} |", flush=True)
 
 
 def chen(args):

@@ -112,6 +112,7 @@ int cmd_capture(const CommandArgs& argv) {
     throw Error("capture: --iteration " + std::to_string(iteration) + " is never assembled: the stepper stops at max_iterations = " +
                 std::to_string(p.max_iterations) + " (raise it with --set max_iterations=N)");
   check_capture_outputs(prefix, scene, p);
+  check_capturable(p);  // before the progress line: the refusal is the one line on stderr
   const double budget = time_budget_flag(args, "capture");
   const std::string head = "capture: " + p.scene + " with " + solver + " to frame " + std::to_string(frame) + ", substep " +
                            std::to_string(substep) + ", iteration " + std::to_string(iteration) + " ...";

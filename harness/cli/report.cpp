@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -117,25 +118,75 @@ void print_json(const std::vector<RunRecord>& runs) {
 }  // namespace
 
 namespace {
+using Column = std::pair<std::string, std::function<std::string(const RunRecord&)>>;
+
+Column attr_column(const std::string& key) {
+  return {key, [key](const RunRecord& r) { return attr_cell(r, key); }};
+}
+
+// The measure a run's stop test read (attribute convergence_measure, results/README.md): under
+// step = newton ‖∇E‖, whose dual residual is rounding over rounding (λ = −α̃⁻¹C), else the dual
+// residual. Files from before the attribute: the dual residual, or under step = newton the relative
+// Newton residual (relative ‖∇E‖ up to that rounding), marked with "~".
+const char* measure_name(const std::string& m) {
+  return m == "energy_gradient" ? "|grad E|" : m == "authors_dual_residual" ? "authors dual" : "dual";
+}
+bool old_newton(const RunRecord& r) { return !r.attrs.count("convergence_measure") && attr_cell(r, "step") == "newton"; }
+std::string measure_cell(const RunRecord& r) {
+  if (old_newton(r)) return "~|grad E|";
+  const auto it = r.attrs.find("convergence_measure");
+  return measure_name(it == r.attrs.end() ? "" : attr_value_text(it->second, 3));
+}
+std::string final_cell(const RunRecord& r) {
+  if (r.attrs.count("convergence_measure")) return attr_cell(r, "final_convergence");
+  return old_newton(r) ? "-" : attr_cell(r, "final_dual_residual");
+}
+std::string relative_cell(const RunRecord& r) {
+  if (r.attrs.count("convergence_measure")) return attr_cell(r, "final_relative_convergence");
+  return attr_cell(r, old_newton(r) ? "final_relative_newton_residual" : "relative_dual_residual");
+}
+// Whether the run's reference (--reference) converged in every substep; "-" without one.
+std::string reference_cell(const RunRecord& r) {
+  if (!r.attrs.count("reference_substeps_unconverged")) return "-";
+  const std::string n = attr_cell(r, "reference_substeps_unconverged");
+  return n == "0" ? "converged" : n + " of " + attr_cell(r, "substeps_total") + " substeps unconverged";
+}
+
+// The simulation table's columns: each run's own convergence measure, and with a reference the
+// position error and whether the reference converged.
+std::vector<Column> simulation_columns(const std::vector<RunRecord>& runs) {
+  std::vector<Column> cols;
+  for (const char* k : {"scene", "solver", "form_used", "status", "outer_iterations"}) cols.push_back(attr_column(k));
+  cols.insert(cols.end(), {{"measure", measure_cell}, {"final", final_cell}, {"relative", relative_cell}});
+  const bool reference = std::any_of(runs.begin(), runs.end(), [](const RunRecord& r) {
+    return attr_cell(r, "level") == "simulation" && r.attrs.count("reference_substeps_unconverged");
+  });
+  if (reference) cols.insert(cols.end(), {attr_column("final_position_error"), {"reference", reference_cell}});
+  cols.push_back(attr_column("wall_time"));
+  return cols;
+}
+
 void print_tables(const std::vector<RunRecord>& runs) {
   // One table per level of run, with the columns that matter for it.
-  const std::vector<std::pair<std::string, std::vector<std::string>>> layouts = {
-      {"simulation", {"scene", "solver", "form_used", "status", "outer_iterations", "final_dual_residual", "relative_dual_residual", "wall_time"}},
-      {"linear", {"system", "solver", "form_used", "status", "iterations", "final_relative_residual", "error_vs_direct", "setup_time", "solve_time", "levels", "operator_complexity"}},
-  };
+  std::vector<Column> linear;
+  for (const char* k : {"system", "solver", "form_used", "status", "iterations", "final_relative_residual", "error_vs_direct",
+                        "setup_time", "solve_time", "levels", "operator_complexity"})
+    linear.push_back(attr_column(k));
+  const std::vector<std::pair<std::string, std::vector<Column>>> layouts = {{"simulation", simulation_columns(runs)},
+                                                                            {"linear", linear}};
   for (const auto& [level, cols] : layouts) {
     std::vector<std::vector<std::string>> rows;
     std::vector<std::string> warnings;
     for (const auto& r : runs)
       if (attr_cell(r, "level") == level) {
         std::vector<std::string> row{r.name};
-        for (const auto& c : cols) row.push_back(attr_cell(r, c));
+        for (const auto& c : cols) row.push_back(c.second(r));
         rows.push_back(row);
         warnings.push_back(timing_warning(r));
       }
     if (rows.empty()) continue;
     std::vector<std::string> header{"run"};
-    header.insert(header.end(), cols.begin(), cols.end());
+    for (const auto& c : cols) header.push_back(c.first);
     // A `timing` column only when some run of this table was timed under load or spinning.
     const bool flagged = std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) { return !w.empty(); });
     if (flagged) {
@@ -156,6 +207,9 @@ void print_tables(const std::vector<RunRecord>& runs) {
     if (flagged)
       std::cout << "* timings suspect: started with the 1-min load average above CPUs - " << load_allowance
                 << ", or OpenMP threads spinning (wait policy not passive); rerun on a quiet machine\n";
+    if (level == "simulation")
+      std::cout << "measure: what each run's stop test read (|grad E| under step = newton, in N; else the dual "
+                   "residual); relative: over the same substep's first value\n";
     std::cout << "\n";
   }
 }

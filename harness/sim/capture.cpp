@@ -9,8 +9,24 @@
 
 namespace xb {
 
+// A captured system is XPBD's step: A Δλ = −(C + α̃λ), and J, α̃, M from which `solve`, the Python
+// System and the GPU export rebuild K = M + Jᵀα̃⁻¹J and its right-hand side. Under these keys the
+// run solves another system (element Hessians in K, g on the right) that no reader could rebuild
+// from the file, so capture refuses rather than write a system the run never solved.
+void check_capturable(const Params& p) {
+  std::string key;
+  if (p.step == "newton") key = "step=newton";
+  else if (p.geometric_stiffness != "none") key = "xpbd.geometric_stiffness=" + p.geometric_stiffness;
+  else if (p.primal_residual != "zero") key = "xpbd.primal_residual=" + p.primal_residual;
+  if (!key.empty())
+    throw Error("capture: " + key + " solves a system other than XPBD's A dlambda = -(C + alpha~ lambda), which is "
+                "what capture writes (with J to rebuild K = M + J^T alpha~^-1 J); capture with step=fixed or "
+                "line_search, xpbd.geometric_stiffness=none and xpbd.primal_residual=zero");
+}
+
 CapturedSystem capture_system(Params p, const std::string& driver, int frame, int substep, int iteration,
                               double time_budget, std::function<void(const IterationProgress&)> on_iteration) {
+  check_capturable(p);
   if (p.frames < frame + 1) p.frames = frame + 1;
   const Problem prob = build_problem(p);
   CapturedSystem sys;

@@ -14,6 +14,11 @@
 
 namespace xb {
 
+// Throws xb::Error naming the key where the run would solve a system other than XPBD's dual step
+// (step = newton, xpbd.geometric_stiffness != none, xpbd.primal_residual != zero): capture writes
+// only that one. capture_system checks it first.
+void check_capturable(const Params& p);
+
 // Runs `driver` (a global method; cholmod by default elsewhere, so that the system does not depend
 // on the solver under test) on the scene of `p` until the system of (frame, substep, iteration)
 // is assembled, and returns it; p.frames is raised to reach the frame. Throws xb::Error saying

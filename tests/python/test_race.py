@@ -1,12 +1,12 @@
 """The race's rules (plots/race_rules.py), shared by its driver (figures/race.py) and its summary
-(plots/race.py): a run's form, the target, failed runs, the lagged factor's note, and a small race
-run end to end with the real binary."""
+(plots/race.py): the time to a position error, a run that never reaches it, a reference that did
+not converge, the best entry, failed runs, and a small race run end to end with the real binary."""
+import math
 import os
 import subprocess
 import sys
 
 import numpy as np
-import pytest
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 sys.path.insert(0, os.path.join(ROOT, "plots"))
@@ -14,104 +14,136 @@ import race  # noqa: E402
 import race_rules as rules  # noqa: E402
 
 
-def fake(status="ok", wall=1.0, residuals=(1.0, 0.5, 0.1), rows=100, **attrs):
-    """A run as xbruns.load gives it: attributes and the first substep's datasets."""
-    n = len(residuals)
-    data = {"iteration": np.arange(n), "frame": np.zeros(n, int), "substep": np.zeros(n, int),
-            "wall_time": np.linspace(0, wall, n), "relative_dual_residual": np.asarray(residuals, float),
-            "linear_iterations": np.full(n, 5.0)}
-    return {"attrs": {"status": status, "wall_time": wall, "outer_iterations": n - 1, "rows": rows,
-                      "relative_dual_residual": residuals[-1], **attrs}, "data": data}
+def fake(errors=(1.0, 0.1, 0.005, 5e-5), wall=3.0, status="ok", reference="converged", rows=100, substeps=None, **attrs):
+    """A run as xbruns.load gives it: attributes and datasets. `substeps`: the substep of each entry
+    (default: one substep); `reference`: the status of each substep's reference."""
+    n = len(errors)
+    sub = np.zeros(n, int) if substeps is None else np.asarray(substeps)
+    it = np.concatenate([np.arange(np.sum(sub == k)) for k in np.unique(sub)])
+    refs = [reference] if isinstance(reference, str) else list(reference)
+    data = {"iteration": it, "frame": np.zeros(n, int), "substep": sub, "wall_time": np.linspace(0, wall, n),
+            "position_error": np.asarray(errors, float), "linear_iterations": np.full(n, 5.0),
+            "reference/status": np.array(refs), "reference/relative_energy_gradient": np.full(len(refs), 2.5e-4)}
+    return {"attrs": {"status": status, "wall_time": wall, "outer_iterations": n - 1, "rows": rows, **attrs}, "data": data}
 
 
 def failed():
     return {"attrs": {"status": "failed", "exit": 137, "message": "Killed", "wall_time": 3.0}}
 
 
-def test_form_is_the_finished_one_faster_per_outer_iteration():
-    assert rules.choose_form({"dual": fake(wall=1.0), "primal": fake(wall=2.0)}) == "dual"
-    # A faster run that broke down does not win (the plot used to ignore the status).
-    assert rules.choose_form({"dual": fake("breakdown", wall=0.1), "primal": fake(wall=2.0)}) == "primal"
-    assert rules.choose_form({"dual": fake("max_iterations", wall=1.0), "primal": fake(wall=2.0)}) == "dual"
-    # A run out of time measured its pace (a breakdown or a divergence did not).
-    assert rules.choose_form({"dual": fake("timeout", wall=1.0), "primal": fake(wall=2.0)}) == "dual"
-    # Neither finished: primal (the driver's fallback, and now the plot's).
-    assert rules.choose_form({"dual": fake("diverged"), "primal": failed()}) == "primal"
-    assert rules.choose_form({"dual": None, "primal": None}) == "primal"
+def test_time_to_a_position_error_is_the_first_entry_at_or_below_it():
+    r = fake(errors=(1.0, 0.1, 0.01, 5e-5), wall=3.0)
+    assert rules.time_to(r, 1e-2) == 2.0  # at the threshold counts
+    assert rules.time_to(r, 1e-4) == 3.0
+    assert rules.verdict(r, 1e-1) == (1.0, "")
+    # Only the judged substep (the run's first): a later substep's smaller error does not count.
+    two = fake(errors=(1.0, 0.5, 1.0, 1e-6), wall=3.0, substeps=(0, 0, 1, 1), reference=("converged", "converged"))
+    assert math.isnan(rules.time_to(two, 1e-4)) and rules.smallest_error(two) == 0.5
 
 
-def test_target_only_from_a_finished_exact_run():
-    assert rules.target(fake(residuals=(1, 0.2, 0.07))) == pytest.approx(0.07)
-    assert np.isnan(rules.target(fake("breakdown", residuals=(1, 0.2, 0.07))))
-    assert np.isnan(rules.target(failed()))
-    r = fake(residuals=(1, 0.5, 0.104, 0.09), wall=3.0)
-    assert rules.time_to(r, 0.1) == pytest.approx(2.0)  # 0.104 is within 5 % of 0.1
-    assert np.isnan(rules.time_to(r, float("nan")))
+def test_a_run_that_never_reaches_it_says_how_close_it_came():
+    r = fake(errors=(1.0, 0.3, 0.25, 0.26))
+    assert rules.verdict(r, 1e-2) == (None, rules.NEVER)
+    assert rules.smallest_error(r) == 0.25
+    e = dict(outer="xpbd", linear="cholmod", forcing="fixed", run=r)
+    assert race.cell(e, 1e-2) == "— (0.25)"
 
 
-def test_best_reaches_the_target_first():
-    slow, quick, broke = fake(wall=4.0, residuals=(1, 0.3, 0.1)), fake(wall=1.0, residuals=(1, 0.3, 0.1)), \
-        fake("diverged", wall=0.1, residuals=(1, 5.0))
-    assert rules.best([slow, broke, quick], 0.1) is quick
-    assert rules.best([broke, fake(wall=1.0, residuals=(1, 0.5))], 0.1)["attrs"]["status"] == "ok"
+def test_a_reference_that_did_not_converge_times_nothing():
+    r = fake(errors=(1.0, 1e-3, 1e-6), reference="stagnated")
+    assert rules.verdict(r, 1e-2) == (None, rules.UNCONVERGED)
+    assert math.isnan(rules.time_to(r, 1e-4))
+    e = dict(outer="newton", linear="mgpbd", forcing="eisenstat_walker", run=r)
+    assert race.cell(e, 1e-2) == "— (reference unconverged)"
+    assert race.reference_text(r) == "stagnated at ‖∇E‖ 0.00025 of its start"
+    # A run without a reference, and a process that left no run, are not timed either.
+    plain = fake()
+    del plain["data"]["position_error"]
+    assert rules.verdict(plain, 1e-2) == (None, rules.NO_REFERENCE)
+    assert rules.verdict(failed(), 1e-2) == (None, rules.NO_DATA)
 
 
-def entry(method, form, forcing, run):
-    return dict(method=method, form=form, forcing=forcing, run=run)
+def test_best_reaches_the_smallest_threshold_first_then_the_next_then_the_error():
+    ths = [1e-2, 1e-4]
+    slow, quick = fake(wall=6.0), fake(wall=3.0)
+    never_small = fake(errors=(1, 1e-3, 5e-4), wall=0.5)
+    assert rules.best([slow, never_small, quick, failed()], ths) is quick
+    near, far = fake(errors=(1, 0.3, 0.2)), fake(errors=(1, 0.5, 0.4), wall=0.1)
+    assert rules.best([far, near], ths) is near
+    # Neither reaches 1e-4: the one that reaches 1e-2 first.
+    early_big, late_small = fake(errors=(1, 5e-3, 4e-3), wall=1.0), fake(errors=(1, 0.5, 5e-3), wall=4.0)
+    assert rules.best([late_small, early_big], ths) is early_big
+    assert rules.first_to([slow, quick], 1e-4) is quick and rules.first_to([near, far], 1e-2) is None
+    assert rules.best([failed()], ths)["attrs"]["status"] == "failed"
 
 
-SPEC = {"methods": {"cholmod": {}, "mgpbd": {}, "mgpbd-double": {"variant_of": "mgpbd"}, "cholmod-lagged": {}},
+def test_the_anchor_frame_bounds_the_budget():
+    anchor = fake(wall=6.0, errors=(1, 0.5, 0.4, 0.3, 0.3, 0.3, 0.3))  # 6 outer iterations, 1 s each
+    assert rules.anchor_frame(anchor, 2) == 2.0
+    assert rules.anchor_frame(failed(), 2) is None
+
+
+SPEC = {"thresholds": [1e-2, 1e-4],
+        "outer": {"xpbd": {"label": "XPBD"}, "newton": {"label": "Newton"}},
+        "linear": {"cholmod": {}, "mgpbd": {}},
         "scenes": {"squash": {"sizes": [{"label": "s"}, {"label": "m"}]}}}
 
 
-def scene():
-    small = [entry("cholmod", "dual", "fixed", fake(wall=2.0)), entry("cholmod", "primal", "fixed", fake(wall=1.0)),
-             entry("mgpbd", "dual", "fixed", fake("breakdown", wall=0.1)), entry("mgpbd", "primal", "fixed", fake()),
-             entry("mgpbd-double", "primal", "fixed", fake(wall=1.5)),
-             entry("cholmod-lagged", "primal", "fixed", fake(wall=3.0, **{
-                 "lagged_setups": 19.0, "refactorisations_in_solve": 18.0, "factorisations": 20.0,
-                 "cholmod.lagged_max_iterations": 30}))]
-    medium = [entry("cholmod", "primal", "fixed", fake("breakdown", rows=400)),
-              entry("mgpbd", "primal", "fixed", fake(rows=400)), entry("mgpbd", "dual", "fixed", fake(rows=400)),
-              entry("mgpbd-double", "primal", "eisenstat_walker", failed())]
-    return race.Scene("squash", {"s": small, "m": medium}, SPEC)
+def entry(outer, linear, forcing, run):
+    return dict(outer=outer, linear=linear, forcing=forcing, run=run)
 
 
-def test_summary_keeps_every_size_failed_runs_and_says_what_it_left_out():
-    sc = scene()
-    assert sc.forms["mgpbd"] == "primal" and sc.forms["cholmod"] == "primal"
-    assert sc.forms["mgpbd-double"] == "primal"  # a variant takes its method's form
-    dual_mgpbd = race.Scene("squash", {"s": [entry("mgpbd", "dual", "fixed", fake(wall=0.5)),
-                                             entry("mgpbd", "primal", "fixed", fake(wall=1.0)),
-                                             entry("mgpbd-double", "primal", "fixed", fake(wall=0.1))]}, SPEC)
-    assert dual_mgpbd.forms == {"mgpbd": "dual", "mgpbd-double": "dual"}
+def test_summary_and_readme_table(tmp_path):
+    small = [entry("xpbd", "cholmod", "fixed", fake(errors=(1, 0.4, 0.3))),
+             entry("xpbd", "mgpbd", "eisenstat_walker", fake(errors=(1, 0.35, 0.29))),
+             entry("newton", "cholmod", "fixed", fake(wall=2.0)),
+             entry("newton", "mgpbd", "eisenstat_walker", fake(wall=1.0)),
+             entry("newton", "mgpbd", "fixed", fake(wall=4.0))]
+    medium = [entry("xpbd", "cholmod", "fixed", fake(rows=400, reference="max_iterations")),
+              entry("newton", "mgpbd", "eisenstat_walker", failed())]
+    sc = race.Scene("squash", {"m": medium, "s": small}, SPEC)
+    assert sc.order == ["s", "m"] and sc.outers == ["xpbd", "newton"]
+    assert sc.pair_best("s")[("newton", "mgpbd")]["forcing"] == "eisenstat_walker"
     text = race.summary([sc])
-    medium = text[text.index("### m"):]
-    assert "| mgpbd | primal |" in medium  # the larger size is kept in the chosen form
-    assert "failed (exit 137: Killed)" in medium  # a process that left no run has its row
-    assert "target nan" in medium  # exact CHOLMOD broke down there: no target
-    assert "mgpbd [dual] at m" in text  # a run in the other form is named, not dropped silently
-    assert "hit the bound of 30 CG iterations" in text and "18" in text and "wasted CG iterations" in text
-    head = text[text.index("## Each method at its best"):text.index("## squash")]
-    assert "| squash s (100) | 0.1 | 1.00 |" in head and "| squash m (400) | nan | — (breakdown) |" in head
-    # One line per method in the main panels: mgpbd-double is mgpbd's variant.
-    assert set(sc.best_by_family("s")) == {"cholmod", "mgpbd", "cholmod-lagged"}
+    head = text[text.index("## Each outer method"):text.index("## squash")]
+    assert "| squash s (100) | 0.01 | — (0.29) | 0.67 (mgpbd (EW)) |" in head, head
+    assert "| squash s (100) | 0.0001 | — (0.29) | 1.00 (mgpbd (EW)) |" in head, head
+    assert "| squash m (400) | 0.01 | — (reference unconverged) | — (failed) |" in head, head
+    medium_text = text[text.index("### m"):]
+    assert "failed (exit 137: Killed)" in medium_text and "max_iterations at ‖∇E‖" in medium_text
+    readme = tmp_path / "README.md"
+    readme.write_text(f"intro\n{race.README_BEGIN}\nold table\n{race.README_END}\nrest\n")
+    race.write_readme(str(readme), [sc])
+    new = readme.read_text()
+    assert "old table" not in new and "| squash s (100) | 0.01 |" in new and new.endswith(f"{race.README_END}\nrest\n")
 
 
 def test_a_small_race_end_to_end(bench, tmp_path):
-    """figures/race.py with the real binary: the forms it chose are the summary's, and a run whose
-    process failed (an invalid value) has its row."""
+    """figures/race.py with the real binary: every entry runs with --reference, Newton's keeps its
+    profile's stop test, the summary times the position error, and a process that failed (an
+    invalid value) has its row."""
     spec = tmp_path / "race.toml"
-    spec.write_text('''forcing = ["fixed"]
+    spec.write_text('''thresholds = [1e-2, 1e-4]
+forcing = ["fixed"]
 time_budget = 60
-[methods.cholmod]
+overrun = 2
+[outer.xpbd]
+label = "XPBD"
+[outer.newton]
+label = "Newton"
+profile = "newton"
+own_stop = true
+[linear.cholmod]
 solver = "cholmod"
 forcing = false
-[methods.jacobi-pcg]
+[linear.jacobi-pcg]
 solver = "jacobi-pcg"
-[methods.broken]
+[linear.broken]
 solver = "cholmod"
 set = { "cholmod.refactor" = "sometimes" }
+[linear.xpbd-gs]
+solver = "xpbd-gs"
+local = true
 [scenes.bar]
 scene = "bar_hang"
 set = { rtol = 0, atol = 0, max_iterations = 4, resolution = 2 }
@@ -120,12 +152,15 @@ sizes = [ { label = "r2" } ]
 ''')
     out = tmp_path / "out"
     done = subprocess.run([sys.executable, os.path.join(ROOT, "figures", "race.py"), "--bench", bench, "--spec", str(spec),
-                           "--out", str(out), "--quick", "--quiet"], capture_output=True, text=True, timeout=240)
+                           "--out", str(out), "--quick", "--quiet"], capture_output=True, text=True, timeout=400)
     assert done.returncode == 0, done.stdout + done.stderr
-    forms = next(line for line in done.stdout.splitlines() if line.startswith("race: bar forms:"))
+    cmds = [line for line in done.stdout.splitlines() if line.startswith("race: ") and " run " in line]
+    assert cmds and all("--reference" in c for c in cmds)
+    assert "--set max_iterations=8" in cmds[0] and "cholmod" in cmds[0]  # the anchor first, at overrun × 4
+    newton = [c for c in cmds if "--profile newton" in c]
+    assert len(newton) == 3 and not any("rtol=" in c or "max_iterations=" in c for c in newton)
+    assert not any("xpbd-gs" in c and "--profile" in c for c in cmds)  # a sweep runs only under XPBD
     summary = (out / "summary.md").read_text()
-    for item in forms.split(":", 2)[2].split(","):
-        method, form = item.split()
-        assert f"{method} {form} (" in summary, (method, form, summary)
-    assert "| broken | primal |" in summary and "failed (exit" in summary
-    assert (out / "race_bar.png").exists() and (out / "race_crossover.png").exists()
+    assert "| Newton | cholmod | fixed |" in summary and "converged" in summary
+    assert "| XPBD | broken | fixed |" in summary and "failed (exit" in summary
+    assert (out / "race_bar.png").exists() and (out / "timings.tsv").exists()

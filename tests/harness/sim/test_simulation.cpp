@@ -1,5 +1,6 @@
 // The stepper and the baseline methods on cases with known answers.
 #include "harness/sim/simulation.hpp"
+#include "core/error.hpp"
 #include "problems/dual_system.hpp"
 #include "problems/scene.hpp"
 #include "solvers/linear_solver.hpp"
@@ -154,4 +155,28 @@ TEST(Simulation, OutOfMemoryIsAnErrorSayingWhere) {
   ASSERT_EQ(::waitpid(pid, &st, 0), pid);
   ASSERT_TRUE(WIFEXITED(st)) << "the child crashed (signal " << (WIFSIGNALED(st) ? WTERMSIG(st) : 0) << ")";
   EXPECT_EQ(WEXITSTATUS(st), 0) << "see the child's status line above";
+}
+
+// step = newton without the constraints' Hessians (xpbd.geometric_stiffness none or diagonal) would
+// be Gauss–Newton on E recorded as Newton (exact_hessian 1 included): refused, naming the key.
+TEST(Simulation, NewtonWithoutTheConstraintHessiansIsRefused) {
+  Params p;
+  load_scene_file(std::string(XB_SOURCE_DIR) + "/problems/scenes/bar_hang.toml", p);
+  p.resolution = 2;
+  p.step = "newton";
+  p.form = "primal";
+  p.primal_residual = "keep";
+  for (const std::string gs : {"none", "diagonal"}) {
+    p.geometric_stiffness = gs;
+    try {
+      run_simulation(build_problem(p), p, "cholmod");
+      ADD_FAILURE() << "step=newton ran with xpbd.geometric_stiffness=" << gs;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("step=newton needs xpbd.geometric_stiffness=full"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("Gauss-Newton"), std::string::npos) << e.what();
+    }
+  }
+  p.geometric_stiffness = "full";
+  p.max_iterations = 2;
+  EXPECT_NE(run_simulation(build_problem(p), p, "cholmod").status, "error");
 }
