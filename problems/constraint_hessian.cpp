@@ -206,19 +206,16 @@ Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x
   Eigen::Matrix3d U, V;
   Eigen::Vector3d s;
   svd_rv(F, U, s, V);
+  // tet_arap_constraint's C and ∇C with Newton's rest_epsilon = 0, from the same SVD
+  const double c = tet_arap_from_svd(F, U, s, V, Dm_inv, grad, 0.0);
+  if (C) *C = c;
+  return tet_energy_hessian_from_svd(F, U, s, V, Dm_inv, alpha_tilde, proj, smallest, tolerance);
+}
+
+Matrix12d tet_energy_hessian_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& s,
+                                      const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, double alpha_tilde,
+                                      Projection proj, double* smallest, double tolerance) {
   const ArapEigensystem es = arap_eigensystem(F, U, s, V);
-  if (C) *C = es.C;
-  if (grad) {  // tet_arap_constraint's formula with Newton's rest_epsilon = 0, from the same SVD
-    if (es.C == 0) {
-      for (auto& g : *grad) g.setZero();
-    } else {
-      const Eigen::Matrix3d G = ((F - U * V.transpose()) / es.C) * Dm_inv.transpose();
-      (*grad)[1] = G.col(0);
-      (*grad)[2] = G.col(1);
-      (*grad)[3] = G.col(2);
-      (*grad)[0] = -(G.col(0) + G.col(1) + G.col(2));
-    }
-  }
   const double lowest = es.psi.minCoeff();
   if (lowest >= -tolerance) proj = Projection::none;
   Eigen::Matrix<double, 9, 1> mu;

@@ -126,5 +126,9 @@ Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x
                              const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj,
                              double* C = nullptr, std::array<Eigen::Vector3d, 4>* grad = nullptr, double* smallest = nullptr,
                              double tolerance = 0);
+// The same from F = UΣVᵀ (svd_rv) already at hand: no decomposition (ElementHessians::evaluate keeps them).
+Matrix12d tet_energy_hessian_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& sigma,
+                                      const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, double alpha_tilde,
+                                      Projection proj, double* smallest = nullptr, double tolerance = 0);
 
 }  // namespace xb

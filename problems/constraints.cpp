@@ -46,6 +46,12 @@ double tet_arap_constraint(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
   Eigen::Matrix3d U, V;
   Eigen::Vector3d s;
   svd_rv(F, U, s, V);
+  return tet_arap_from_svd(F, U, s, V, Dm_inv, grad, rest_epsilon);
+}
+
+double tet_arap_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& s,
+                         const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad,
+                         double rest_epsilon) {
   const double C = std::sqrt((s.array() - 1.0).square().sum());
   if (grad) {
     if (C < rest_epsilon || C == 0) {

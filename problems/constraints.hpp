@@ -50,5 +50,9 @@ double tet_arap_constraint(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
 
 // Rotation-variant SVD of a 3×3 matrix: F = U diag(sigma) Vᵀ with U, V proper rotations.
 void svd_rv(const Eigen::Matrix3d& F, Eigen::Matrix3d& U, Eigen::Vector3d& sigma, Eigen::Matrix3d& V);
+// The tet's C and (if grad) ∇C from F = UΣVᵀ already at hand (tet_arap_constraint's formula).
+double tet_arap_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& sigma,
+                         const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad,
+                         double rest_epsilon = tet_rest_epsilon);
 
 }  // namespace xb

@@ -73,8 +73,13 @@ class ElementHessians {
                            ConstraintState* state = nullptr) {
     fill_energy_hessian(x, alpha_tilde, ElementProjection{proj, 0}, state);
   }
+  // reuse_svd: x is the point of the last evaluate(), whose tet SVDs are used (no decomposition).
   void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, const ElementProjection& proj,
-                           ConstraintState* state = nullptr);
+                           ConstraintState* state = nullptr, bool reuse_svd = false);
+  // Newton's evaluation at x (problems/constraints.hpp with rest_epsilon = 0): every constraint's C
+  // and ∇C into `state`, each tet's SVD kept for the next fill_energy_hessian(…, reuse_svd = true)
+  // at the same x, so an iteration decomposes each element once.
+  void evaluate(const Eigen::Matrix3Xd& x, ConstraintState& state);
   const ElementMatrices& blocks() const { return blocks_; }
   // After fill_energy_hessian, per constraint: the smallest eigenvalue of its exact (unprojected)
   // H_j in the closed-form eigenbasis (problems/constraint_hessian.hpp); negative: indefinite.
@@ -96,6 +101,11 @@ class ElementHessians {
   std::vector<int> inc_start_, inc_;                   // particle → (constraint << 2 | slot)
   std::vector<double> smallest_;
   int indefinite_ = 0, projected_ = 0;
+  struct Svd {
+    Eigen::Matrix3d U, V;
+    Eigen::Vector3d sigma;
+  };
+  std::vector<Svd> svd_;  // per tet, of the last evaluate()
 };
 
 // Per-dof inverse masses of M̃ = M + K̃_d: w_dof(d, p) = 1/(1/w_p + kd(d, p)), 0 where w_p = 0.

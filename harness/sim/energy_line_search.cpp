@@ -6,6 +6,7 @@
 #include "../../core/error.hpp"
 
 #include <cmath>
+#include <utility>
 #include <limits>
 
 namespace xb {
@@ -17,9 +18,12 @@ LineSearchKind parse_line_search(const std::string& name) {
 }
 
 EnergyLineSearch::EnergyLineSearch(const Problem& prob, const DualSystem& ds, const Eigen::VectorXd& alpha_tilde,
-                                   double h, LineSearchKind kind, const PlaneBounds* bounds)
+                                   double h, LineSearchKind kind, const PlaneBounds* bounds, ConstraintEvaluator evaluate)
     : prob_(prob), ds_(ds), alpha_tilde_(alpha_tilde), h_(h), kind_(kind),
-      bounds_(bounds && !bounds->empty() ? bounds : nullptr) {}
+      bounds_(bounds && !bounds->empty() ? bounds : nullptr), evaluate_(std::move(evaluate)) {
+  if (!evaluate_)
+    evaluate_ = [this](const Eigen::Matrix3Xd& x, ConstraintState& s) { evaluate_constraints(prob_, x, s, newton_rest_epsilon); };
+}
 
 EnergySearch EnergyLineSearch::search(const LineSearchStart& start, const Eigen::Matrix3Xd& x_pred,
                                       LineSearchTrial& trial) const {
@@ -34,7 +38,7 @@ EnergySearch EnergyLineSearch::search(const LineSearchStart& start, const Eigen:
     if (bounds_) bounds_->project(trial.x);
     step = trial.x - start.x;
     const double slope = particle_dot(prob_, start.g, step) / h2;  // Δ(t) along the projected path
-    evaluate_constraints(prob_, trial.x, trial.state, newton_rest_epsilon);
+    evaluate_(trial.x, trial.state);
     ++s.trials;
     const double e = incremental_energy(prob_, trial.state, trial.x, x_pred, h_);
     // A NaN trial (a degenerate element) passes neither test.

@@ -18,6 +18,7 @@
 
 #include <Eigen/Dense>
 
+#include <functional>
 #include <string>
 
 namespace xb {
@@ -52,10 +53,13 @@ struct LineSearchTrial {
   Eigen::VectorXd lambda;
 };
 
+// Evaluates the constraints at a trial point (default: evaluate_constraints with Newton's rest cut).
+using ConstraintEvaluator = std::function<void(const Eigen::Matrix3Xd& x, ConstraintState& state)>;
+
 class EnergyLineSearch {
  public:
   EnergyLineSearch(const Problem& prob, const DualSystem& ds, const Eigen::VectorXd& alpha_tilde, double h,
-                   LineSearchKind kind, const PlaneBounds* bounds = nullptr);
+                   LineSearchKind kind, const PlaneBounds* bounds = nullptr, ConstraintEvaluator evaluate = {});
   // Searches from `start` (x feasible); on acceptance `trial` holds x(t), its state and gradient.
   EnergySearch search(const LineSearchStart& start, const Eigen::Matrix3Xd& x_pred, LineSearchTrial& trial) const;
 
@@ -66,6 +70,7 @@ class EnergyLineSearch {
   double h_;
   LineSearchKind kind_;
   const PlaneBounds* bounds_;
+  ConstraintEvaluator evaluate_;
 };
 
 }  // namespace xb

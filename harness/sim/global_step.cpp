@@ -52,7 +52,8 @@ double GlobalStep::prepare(const GlobalStepInput& in) {
     elements_->geometric_stiffness_diagonal(in.x, in.lambda, kd_);
     shifted_inverse_masses(prob_.particles.w, kd_, minv_);
   } else if (stiffness_ == "full" && newton_) {
-    elements_->fill_energy_hessian(in.x, alpha_tilde_, in.elements ? *in.elements : ElementProjection{in.projection});
+    elements_->fill_energy_hessian(in.x, alpha_tilde_, in.elements ? *in.elements : ElementProjection{in.projection},
+                                   nullptr, in.evaluated);
   } else if (stiffness_ == "full") {
     elements_->fill_geometric_stiffness(in.x, in.lambda, in.projection);
   }

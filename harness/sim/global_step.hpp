@@ -37,6 +37,8 @@ struct GlobalStepInput {
   // and the particles whose y the step holds (contact's active bounds, harness/sim/plane_bounds.hpp).
   const ElementProjection* elements = nullptr;
   const std::vector<int>* held = nullptr;
+  // step = newton: `state` came from elements()->evaluate(x): its tet SVDs are reused in the fill.
+  bool evaluated = false;
 };
 
 class GlobalStep {
@@ -59,6 +61,7 @@ class GlobalStep {
   double primal_fill_time() const { return primal_ ? primal_->fill_time() : 0; }
   // The element matrices of the last prepare() (geometric_stiffness = diagonal | full), or null.
   const ElementHessians* elements() const { return elements_ ? &*elements_ : nullptr; }
+  ElementHessians* elements() { return elements_ ? &*elements_ : nullptr; }
 
  private:
   void dual_step(const GlobalStepInput& in, const Vector& dlambda, Eigen::Matrix3Xd& dx);

@@ -29,10 +29,20 @@ NewtonLoop::NewtonLoop(const Problem& prob, const DualSystem& ds, GlobalStep& st
                        double h, const NewtonSettings& s)
     : prob_(prob), ds_(ds), step_(step), alpha_tilde_(alpha_tilde), h_(h), s_(s),
       strategy_(prob, s.projection, s.exact_below), bounds_(prob),
-      search_(prob, ds, alpha_tilde, h, s.line_search, &bounds_) {}
+      search_(prob, ds, alpha_tilde, h, s.line_search, &bounds_,
+              [this](const Eigen::Matrix3Xd& x, ConstraintState& st) { evaluate_at(x, st); }) {}
+
+// Through the element Hessians where there are (the step's `full`): their SVDs are kept for the
+// Hessian fill at the same point, one decomposition per element per iteration.
+void NewtonLoop::evaluate_at(const Eigen::Matrix3Xd& x, ConstraintState& state) {
+  if (ElementHessians* eh = step_.elements())
+    eh->evaluate(x, state);
+  else
+    evaluate_constraints(prob_, x, state, newton_rest_epsilon);
+}
 
 void NewtonLoop::evaluate(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred) {
-  evaluate_constraints(prob_, x, state_, newton_rest_epsilon);
+  evaluate_at(x, state_);
   eliminate_multipliers(state_, alpha_tilde_, lambda_);
   primal_residual_vector(prob_, ds_, state_, x, x_pred, lambda_, g_);
   energy_ = incremental_energy(prob_, state_, x, x_pred, h_);
@@ -42,7 +52,7 @@ bool NewtonLoop::direction(int it, double relative, const Eigen::Matrix3Xd& x, S
                            const NewtonHooks& hooks, NewtonOutcome& out) {
   ElementProjection proj = strategy_.first(it, relative);
   for (;;) {
-    const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &active_};
+    const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &active_, step_.elements() != nullptr};
     if (hooks.phase) hooks.phase("the fill of the element Hessians");
     rec.fill += step_.prepare(in);
     if (hooks.on_system && hooks.on_system(in, it)) {

@@ -93,6 +93,7 @@ class NewtonLoop {
   const ProjectionStrategy& strategy() const { return strategy_; }
 
  private:
+  void evaluate_at(const Eigen::Matrix3Xd& x, ConstraintState& state);
   void evaluate(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred);
   // Solves for dx_ (tries until a descent direction or nothing left); false with the reason set.
   bool direction(int it, double relative, const Eigen::Matrix3Xd& x, StepRecord& rec, const NewtonHooks& hooks,

@@ -44,7 +44,7 @@ class ReferenceSolver {
   static constexpr int max_iterations = 100;
   static constexpr int stagnation_window = 5;
   // newton: the projection strategy of its loop (harness/sim/hessian_projection.hpp).
-  static constexpr const char* projection = "on_demand";
+  static constexpr const char* projection = "progressive";
 
   // `prob` and `alpha_tilde` must outlive the solver; only the problem's topology, masses and
   // colliders are used. Throws xb::Error for reference.method = newton with a rigid constraint.
