@@ -8,16 +8,19 @@
 #       writes mgpbd's hierarchy into each (xpbd_bench.export_hierarchy: the primal form of the
 #       squash, the dual of the cloth); solves each with C++ mgpbd on this machine's cores to the
 #       dual 1e-8 and 0.1 (gpu_captures/cpu_mgpbd.json: the column to compare against); and packs
-#       the .h5 files into parts of at most 60 MiB, gpu_captures/parts/NN/chunk (a device call
-#       carries at most 64 MiB).
+#       the .h5 files into parts gpu_captures/parts/NN/chunk, each small enough to travel with
+#       the working tree in one device call (64 MiB in all: python/xpbd_bench/device_parts.py
+#       measures the tree now and sizes the parts to fit beside it).
 #   scripts/gpu_check.sh run                on the device machine, Python only (no C++ build):
 #       joins the parts, makes sure CuPy imports (pip-installs cupy-cuda12x if absent, or the
-#       wheels carried in .whl/), runs python3 -m xpbd_bench.gpu_bench on every capture to 1e-8 and
-#       the race's loose 0.1, and writes one JSON: $OUT/gpu_check.json (gpu_captures/ without $OUT).
+#       wheels carried in .whl/), runs python3 -m xpbd_bench.gpu_bench --backend cupy on every
+#       capture to 1e-8 and the race's loose 0.1, and writes one JSON: $OUT/gpu_check.json
+#       (gpu_captures/ without $OUT). Without CuPy or a device it fails: it never measures NumPy
+#       in the device's place.
 #
 # SIZES=small limits both steps to the two smaller captures (one part: a single device call).
-# BENCH_ARGS adds gpu_bench options (a dry run here: BENCH_ARGS="--no-baseline --tol 0.1").
-# Without nvidia-smi (no device) nothing is installed and gpu_bench runs on NumPy.
+# BENCH_ARGS adds gpu_bench options after --backend cupy (a dry run here, on the CPU:
+# BENCH_ARGS="--backend numpy --no-baseline --tol 0.1").
 # Every part is carried by one device call on the same warm machine (ignored files stay there
 # between calls): carry gpu_captures/parts/00, then 01, ..., the last call running
 # `bash scripts/gpu_check.sh run` (docs/gpu.md gives the calls).
@@ -82,12 +85,9 @@ EOF
     list+=("$name.h5")
   done < <(captures)
   cp "$dir/cpu_mgpbd.json" "$dir/carry/"
-  tar -C "$dir/carry" -cf - "${list[@]}" cpu_mgpbd.json | split -b 60M -d -a 2 - "$dir/parts/chunk."
-  for f in "$dir"/parts/chunk.*; do
-    local n="${f##*.}"
-    mkdir -p "$dir/parts/$n"
-    mv "$f" "$dir/parts/$n/chunk"
-  done
+  tar -C "$dir/carry" -cf "$dir/captures.tar" "${list[@]}" cpu_mgpbd.json
+  PYTHONPATH="$root/python" python3 -m xpbd_bench.device_parts split "$dir/captures.tar" "$dir/parts" --root "$root"
+  rm -f "$dir/captures.tar"
   ls -l "$dir"/parts/*/chunk >&2
   echo "gpu_check prepare: $(ls -d "$dir"/parts/*/ | wc -l) part(s); carry each in turn (docs/gpu.md)" >&2
 }
@@ -102,12 +102,13 @@ run() {
       python3 -m pip install -q cupy-cuda12x || echo "gpu_check: CuPy is missing and could not be installed" >&2
     fi
   fi
+  command -v nvidia-smi >/dev/null || echo "gpu_check: no nvidia-smi: no device here (gpu_bench --backend cupy will fail)" >&2
   nvidia-smi --query-gpu=name,memory.total,clocks.max.memory --format=csv,noheader || true
   local out="${OUT:-$dir}/gpu_check.json"
   local list=()
   while read -r name _; do [ -f "$dir/carry/$name.h5" ] && list+=("$dir/carry/$name.h5"); done < <(captures)
   PYTHONPATH="$root/python${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1 \
-    python3 -m xpbd_bench.gpu_bench "${list[@]}" --out "$out" --tol 1e-8 0.1 --repeat 3 ${BENCH_ARGS:-}
+    python3 -m xpbd_bench.gpu_bench "${list[@]}" --out "$out" --tol 1e-8 0.1 --repeat 3 --backend cupy ${BENCH_ARGS:-}
   cp "$dir/carry/cpu_mgpbd.json" "${OUT:-$dir}/cpu_mgpbd.json" 2>/dev/null || true
   echo "gpu_check: wrote $out" >&2
 }

@@ -1,4 +1,4 @@
-// list, run and report.
+// list, run, report and pack.
 #include "args.hpp"
 #include "commands.hpp"
 #include "report.hpp"
@@ -74,7 +74,7 @@ void add_frame_writers(RunOptions& opt, const Args& args, const Problem& prob, c
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
             {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}, {"--profile"}, {"--quiet", false},
-             {"--save-state"}, {"--frame-of-state"}, {"--load-state"}});
+             {"--save-state"}, {"--frame-of-state"}, {"--load-state"}, {"--append", false}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
   const std::string out = args.require("--out");
@@ -102,7 +102,7 @@ int cmd_run(const CommandArgs& argv) {
   if (args.has("--profile")) inputs.push_back(resolve_profile(args.get("--profile")));
   if (args.has("--load-state")) inputs.push_back(args.get("--load-state"));
   check_output("run", "--out", out, inputs);
-  check_replaceable("run", out);
+  ResultsWriter writer = command_writer("run", out, args.has("--append"));  // replaces out unless --append
   if (!save_state.empty()) {
     inputs.push_back(out);  // the state must not land on the results either
     check_output("run", "--save-state", save_state, inputs);
@@ -135,9 +135,9 @@ int cmd_run(const CommandArgs& argv) {
     const RunResult res = run_simulation(prob, q, method, run_opt);
     line.stop();
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
-    if (failed) throw command_write_error("run", *failed, out, index);
+    if (failed) throw command_write_error("run", *failed, out, writer.runs_in_file());
     ++index;
-    append_command_run("run", out, make_simulation_record(run_name(index, p.scene, tag), q, method, res), index == 1, index - 1);
+    append_command_run("run", writer, make_simulation_record(p.scene + "_" + tag, q, method, res), writer.runs_in_file());
   }
   print_report(out, "table");
   return 0;
@@ -150,6 +150,24 @@ int cmd_report(const CommandArgs& argv) {
   if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
   // Unreadable runs are named on stderr and skipped; the exit code says some were.
   return print_report(args.positional()[0], format) > 0 ? 1 : 0;
+}
+
+int cmd_pack(const CommandArgs& argv) {
+  Args args("pack", argv, {{"--out"}}, 1);
+  if (args.positional().empty()) throw Error("pack: which results file? (pack FILE.h5 --out ONE.h5)");
+  const std::string src = args.positional()[0], out = args.require("--out");
+  check_output("pack", "--out", out, {src});
+  check_replaceable("pack", out);
+  if (!is_results_file(src)) throw Error("pack: " + src + " is not an xpbd-bench results file (no group /runs)");
+  std::vector<std::string> skipped;
+  try {
+    skipped = pack_runs(src, out);
+  } catch (const WriteError& e) {
+    throw WriteError(e.path, e.err, std::string("pack: ") + e.what());
+  }
+  warn_skipped("pack", skipped);
+  std::cout << "pack: wrote " << out << " (" << count_runs(out) << " runs, one file)\n";
+  return skipped.empty() ? 0 : 1;  // as report: some runs could not be read
 }
 
 }  // namespace xb

@@ -278,13 +278,13 @@ void record_outcome(RunRecord& r, SolveOutcome o, const DirectReference& ref, co
 }  // namespace
 
 int cmd_solve(const CommandArgs& argv) {
-  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}, {"--quiet", false}});
+  Args args("solve", argv, {{"--system"}, {"--solver"}, {"--tol"}, {"--set", true, true}, {"--out"}, {"--form"}, {"--quiet", false}, {"--append", false}});
   // Everything is checked before anything is written.
   const std::string system_path = args.require("--system");
   const std::string out = args.require("--out");
   const auto runs = method_runs(parse_methods(args.require("--solver"), true), args.get("--form", ""));
   check_output("solve", "--out", out, {system_path});
-  check_replaceable("solve", out);
+  ResultsWriter writer = command_writer("solve", out, args.has("--append"));  // replaces out unless --append
   const CapturedSystem sys = read_system_h5(system_path);
   Params p = params_from_system(sys, system_path);
   for (const auto& s : args.all("--set")) apply_set(p, s);
@@ -313,7 +313,7 @@ int cmd_solve(const CommandArgs& argv) {
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto& [q, form] = setups[i];
     RunRecord r;
-    r.name = run_name(static_cast<int>(i + 1), stem, runs[i].tag);
+    r.name = stem + "_" + runs[i].tag;
     add_provenance(r, q);
     // The capture's identity (the parameters above are those of the solve).
     for (const char* k : {"frame", "substep", "iteration", "capture_solver", "asymmetry"})
@@ -337,7 +337,7 @@ int cmd_solve(const CommandArgs& argv) {
       outcome = solve_one(sys, runs[i].method, q, form);
     }
     record_outcome(r, std::move(outcome), ref, sys.A, sys.b);
-    append_command_run("solve", out, r, i == 0, static_cast<int>(i));
+    append_command_run("solve", writer, r, writer.runs_in_file());
   }
   print_report(out, "table");
   return 0;

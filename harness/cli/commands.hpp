@@ -13,4 +13,5 @@ int cmd_report(const CommandArgs& args);
 int cmd_sweep(const CommandArgs& args);
 int cmd_capture(const CommandArgs& args);
 int cmd_solve(const CommandArgs& args);
+int cmd_pack(const CommandArgs& args);
 }  // namespace xb

@@ -9,6 +9,8 @@
 
 #include <unistd.h>
 
+#include <cerrno>
+
 #include <filesystem>
 
 namespace fs = std::filesystem;
@@ -41,19 +43,23 @@ bool same_file(const std::string& a, const std::string& b) {
 
 void check_not_input(const std::string& what, const std::string& out, const std::vector<std::string>& inputs) {
   for (const auto& in : inputs)
-    for (const std::string& o : {out, out + ".tmp"})
-      if (same_file(o, in))
-        throw Error(what + " " + o + " is " + (o == in ? "" : "the same file as ") + "an input of this command" +
-                    (o == in ? "" : " (" + in + ")") + "; it would be overwritten: write elsewhere");
+    if (same_file(out, in))
+      throw Error(what + " " + out + " is an input of this command; it would be overwritten: write elsewhere");
 }
 
-void make_folder(const std::string& what, const fs::path& dir) {
+// The folder of output `out` (`what` names both in messages): made now; a failure, or one that
+// cannot be written in, is a WriteError naming out.
+void make_folder(const std::string& what, const std::string& out, const fs::path& dir) {
   if (dir.empty()) return;
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) throw Error(what + ": " + dir.string() + " is not a directory");
   fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir)) throw Error(what + ": cannot create directory " + dir.string() + (ec ? ": " + ec.message() : ""));
-  if (::access(dir.c_str(), W_OK | X_OK) != 0) throw Error(what + ": directory " + dir.string() + " is not writable");
+  if (ec || !fs::is_directory(dir))
+    throw WriteError(out, ec ? ec.value() : ENOTDIR, what + ": cannot create directory " + dir.string() + (ec ? ": " + ec.message() : ""));
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+    const int e = errno;
+    throw WriteError(out, e, what + ": cannot write in directory " + dir.string() + ": " + errno_text(e));
+  }
 }
 }  // namespace
 
@@ -64,19 +70,20 @@ void check_output(const std::string& command, const std::string& flag, const std
   if (out.empty() || fs::path(out).filename().empty() || fs::is_directory(out, ec))
     throw Error(what + " is a directory; give a file name");
   check_not_input(command + ": " + flag, out, inputs);
-  make_folder(what, fs::path(out).parent_path());
+  make_folder(what, out, fs::path(out).parent_path());
 }
 
 void check_output_dir(const std::string& command, const std::string& flag, const std::string& dir,
                       const std::vector<std::string>& inputs) {
   for (const auto& in : inputs)
     if (same_file(dir, in)) throw Error(command + ": " + flag + " " + dir + " is an input of this command");
-  make_folder(command + ": " + flag, dir);
+  make_folder(command + ": " + flag, dir, dir);
 }
 
 bool is_results_file(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return false;
+  const h5::Guard guard;  // h5handle.hpp
   h5::silence_errors();
   const h5::H f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   return f >= 0 && H5Lexists(f, "/runs", H5P_DEFAULT) > 0;
@@ -89,13 +96,22 @@ void check_replaceable(const std::string& command, const std::string& out) {
                 "remove it or write elsewhere");
 }
 
-void append_command_run(const std::string& command, const std::string& out, const RunRecord& run, bool fresh,
-                        int kept, const std::string& hint) {
+std::string append_command_run(const std::string& command, ResultsWriter& out, const RunRecord& run, int kept,
+                               const std::string& hint) {
   try {
-    append_runs(out, {run}, fresh);
+    return out.add({run}).at(0);
   } catch (const WriteError& e) {
     throw command_write_error(command, e, "it", kept, hint);
   }
+}
+
+ResultsWriter command_writer(const std::string& command, const std::string& out, bool append) {
+  std::error_code ec;
+  if (!append)
+    check_replaceable(command, out);
+  else if (fs::exists(out, ec) && !is_results_file(out))
+    throw Error(command + ": --out " + out + " exists and is not an xpbd-bench results file; --append only adds to one");
+  return ResultsWriter(out, !append);
 }
 
 WriteError command_write_error(const std::string& command, const WriteError& e, const std::string& holder, int kept,

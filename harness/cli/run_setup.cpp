@@ -34,7 +34,7 @@ void apply_set(Params& p, const std::string& kv) {
   set_param(p, kv.substr(0, eq), kv.substr(eq + 1), "--set");
 }
 
-std::vector<std::string> parse_methods(const std::string& list, bool linear_only) {
+std::vector<std::string> parse_methods(const std::string& list, bool linear_only, bool any_under_mpi) {
   std::vector<std::string> names;
   std::stringstream ss(list);
   std::string item;
@@ -50,7 +50,7 @@ std::vector<std::string> parse_methods(const std::string& list, bool linear_only
       throw Error("unknown solver '" + n + "' (valid: " + valid + ")");
     }
     if (!m->available) throw Error("solver '" + n + "' is not available: " + m->reason);
-    if (mpi_size() > 1 && !method_is_distributed(n))
+    if (mpi_size() > 1 && !any_under_mpi && !method_is_distributed(n))
       throw Error("solver '" + n + "' cannot run distributed (this is an MPI run with " + std::to_string(mpi_size()) +
                   " processes; only hypre and muelu can): run it without mpirun");
   }

@@ -27,8 +27,9 @@ Params resolve_params(const std::string& scene_name_or_file, const std::vector<s
 void apply_set(Params& p, const std::string& key_value);
 
 // A comma-separated list of method names, each known and available; throws listing valid ones.
-// linear_only rejects the local methods.
-std::vector<std::string> parse_methods(const std::string& list, bool linear_only = false);
+// linear_only rejects the local methods. Under mpirun only the distributed methods (hypre, muelu)
+// are accepted, unless any_under_mpi (a sweep, whose ranks may share its jobs: cmd_sweep.cpp).
+std::vector<std::string> parse_methods(const std::string& list, bool linear_only = false, bool any_under_mpi = false);
 
 // One run of `run` or `solve`: a method and the form of its linear step.
 struct MethodRun {

@@ -186,7 +186,7 @@ SweepSpec parse_sweep_spec(const std::string& path, const std::string& size, con
       const std::vector<std::string> names = e.is_array ? e.items : split_list(e.value);
       if (names.empty()) throw Error(where(e) + ": 'solvers' is empty");
       try {
-        spec.solvers = parse_methods(join(names, ","));
+        spec.solvers = parse_methods(join(names, ","), false, true);  // under mpirun: cmd_sweep.cpp decides
       } catch (const Error& err) {
         throw Error(where(e) + ": " + err.what());
       }

@@ -3,14 +3,18 @@
 #include "io_fault.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <mutex>
+#include <random>
 #include <system_error>
 #include <utility>
 
@@ -36,12 +40,46 @@ std::string errno_text(int err) {
   return s;
 }
 
-TmpFile::TmpFile(std::string path) : path_(std::move(path)), tmp_(path_ + ".tmp") {
-  ::unlink(tmp_.c_str());  // a stale one from a killed run
-  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd_ < 0) {
+std::string writer_tag() {
+  char host[256] = "";
+  gethostname(host, sizeof host - 1);
+  std::string h = host;
+  for (char& c : h)
+    if (c == '/' || c == '.') c = '_';  // the tag is read back up to its first '.'
+  return std::to_string(::getpid()) + "@" + h.substr(0, 64);
+}
+
+std::string random_hex8() {
+  static std::mutex m;  // random_device is not promised to be thread-safe
+  std::lock_guard<std::mutex> g(m);
+  static std::random_device rd;
+  char b[16];
+  std::snprintf(b, sizeof b, "%08x", static_cast<unsigned>(rd()));
+  return b;
+}
+
+namespace {
+// ".NAME." and ".tmp": a temporary file of NAME is .NAME.<8 hex>.<pid>@<host>.tmp.
+std::string temporary_head(const std::string& target) {
+  std::string head(1, '.');  // built by appends: GCC 12 warns (falsely, -Wrestrict) on "." + name + "."
+  head += fs::path(target).filename().string();
+  head += '.';
+  return head;
+}
+constexpr const char* temporary_tail = ".tmp";
+}  // namespace
+
+TmpFile::TmpFile(std::string path, std::string shown, bool locked)
+    : path_(std::move(path)), shown_(shown.empty() ? path_ : std::move(shown)) {
+  if (!locked) remove_stale_temporaries(path_);
+  const fs::path dir = fs::path(path_).parent_path();
+  for (int attempt = 0; fd_ < 0; ++attempt) {
+    tmp_ = (dir / (temporary_head(path_) + random_hex8() + "." + writer_tag() + temporary_tail)).string();
+    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd_ >= 0) break;
     const int e = errno;  // before anything else can change it
-    throw WriteError(path_, e, "cannot create " + tmp_ + ": " + errno_text(e) + " (" + path_ + " is left as it was)");
+    if (e != EEXIST || attempt > 8)
+      throw WriteError(shown_, e, "cannot write " + shown_ + ": " + errno_text(e) + " (" + shown_ + " is left as it was)");
   }
 }
 
@@ -55,19 +93,19 @@ void TmpFile::fail(const std::string& verb, int err) {
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
   ::unlink(tmp_.c_str());
-  throw WriteError(path_, err, "cannot " + verb + ": " + errno_text(err) + " (" + path_ + " is left as it was)");
+  throw WriteError(shown_, err, "cannot " + verb + ": " + errno_text(err) + " (" + shown_ + " is left as it was)");
 }
 
 void TmpFile::put(const char* data, std::size_t n) {
-  if (const int e = io_fault::next_write()) fail("write " + path_, e);
+  if (const int e = io_fault::next_write()) fail("write " + shown_, e);
   while (n > 0) {
     const ssize_t k = ::write(fd_, data, n);
     if (k < 0 && errno == EINTR) continue;
     if (k < 0) {
       const int e = errno;
-      fail("write " + path_, e);
+      fail("write " + shown_, e);
     }
-    if (k == 0) fail("write " + path_, ENOSPC);  // no progress on a regular file: the device is full
+    if (k == 0) fail("write " + shown_, ENOSPC);  // no progress on a regular file: the device is full
     data += k;
     n -= static_cast<std::size_t>(k);
   }
@@ -110,7 +148,7 @@ void TmpFile::write_text(const std::function<void(std::FILE*)>& body) {
   std::FILE* f = ::fopencookie(&cookie, "w", io);
   if (!f) {
     const int e = errno;
-    fail("write " + path_, e);
+    fail("write " + shown_, e);
   }
   try {
     body(f);
@@ -121,21 +159,21 @@ void TmpFile::write_text(const std::function<void(std::FILE*)>& body) {
   const bool ok = std::fflush(f) == 0 && !std::ferror(f);
   std::fclose(f);
   if (cookie.error) std::rethrow_exception(cookie.error);
-  if (!ok) fail("write " + path_, EIO);
+  if (!ok) fail("write " + shown_, EIO);
 }
 
 void TmpFile::finish() {
   if (fd_ < 0) return;
   if (!pending_.empty()) put(pending_.data(), pending_.size());
   pending_.clear();
-  if (const int e = io_fault::next_write()) fail("flush " + path_ + " to disk", e);
+  if (const int e = io_fault::next_write()) fail("flush " + shown_ + " to disk", e);
   if (::fsync(fd_) != 0) {
     const int e = errno;
-    fail("flush " + path_ + " to disk", e);
+    fail("flush " + shown_ + " to disk", e);
   }
   if (::close(std::exchange(fd_, -1)) != 0) {
     const int e = errno;
-    fail("close " + path_, e);
+    fail("close " + shown_, e);
   }
 }
 
@@ -143,7 +181,7 @@ void TmpFile::commit() {
   finish();
   int e = io_fault::next_rename();
   if (e == 0 && ::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
-  if (e) fail("rename " + tmp_ + " to " + path_, e);
+  if (e) fail("write " + shown_ + " (rename into place)", e);
   committed_ = true;
   fsync_folder(path_);
 }
@@ -152,6 +190,33 @@ void make_parent(const std::string& path) {
   const fs::path parent = fs::path(path).parent_path();
   std::error_code ec;
   if (!parent.empty()) fs::create_directories(parent, ec);
+}
+
+bool is_temporary_of(const std::string& name, const std::string& target) {
+  const std::string head = temporary_head(target);
+  return name.size() > head.size() + 4 && name.compare(0, head.size(), head) == 0 && name.ends_with(temporary_tail) &&
+         name.find('.', head.size()) == head.size() + 8;  // the 8 hex digits, then the writer
+}
+
+void remove_stale_temporaries(const std::string& path, bool all) {
+  const fs::path dir = fs::path(path).parent_path();
+  const std::string head = temporary_head(path), mine = writer_tag();
+  const std::string host = mine.substr(mine.find('@'));
+  std::error_code ec;
+  for (fs::directory_iterator it(dir.empty() ? fs::path(".") : dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (!is_temporary_of(name, path)) continue;
+    // .NAME.<hex8>.<pid>@<host>.tmp: gone when made here by a process that no longer exists.
+    const std::string writer = name.substr(head.size() + 9, name.size() - head.size() - 9 - 4);
+    const size_t at = writer.find('@');
+    bool gone = all;
+    if (!gone && at != std::string::npos && writer.substr(at) == host) {
+      const long pid = std::strtol(writer.substr(0, at).c_str(), nullptr, 10);
+      gone = pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+    }
+    if (gone) fs::remove(it->path(), ec);  // a race with another cleaner is harmless
+    ec.clear();
+  }
 }
 
 void write_text_atomically(const std::string& path, const std::function<void(std::FILE*)>& body) {
@@ -166,26 +231,6 @@ void write_file_atomically(const std::string& path, const void* data, std::size_
   TmpFile tmp(path);
   tmp.write(data, n);
   tmp.commit();
-}
-
-std::vector<char> read_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw Error("cannot read " + path + ": " + errno_text(errno));
-  std::vector<char> bytes;
-  char buf[65536];
-  for (;;) {
-    const ssize_t k = ::read(fd, buf, sizeof buf);
-    if (k < 0 && errno == EINTR) continue;
-    if (k < 0) {
-      const int e = errno;
-      ::close(fd);
-      throw Error("cannot read " + path + ": " + errno_text(e));
-    }
-    if (k == 0) break;
-    bytes.insert(bytes.end(), buf, buf + k);
-  }
-  ::close(fd);
-  return bytes;
 }
 
 }  // namespace xb

@@ -11,9 +11,27 @@
 
 #include <hdf5.h>
 
+#include <mutex>
 #include <utility>
 
 namespace xb::h5 {
+
+// The libhdf5 linked here is not built thread-safe, and the Python package runs commands in
+// threads (the GIL is released around them): every public function of harness/io that touches
+// HDF5 holds this one process-wide lock (a Guard before its first H, so every handle is closed
+// under it too). Recursive: a guarded function may call another. Taken after a results file's
+// FileLock, never before (file_lock.hpp), so that a thread waiting for a file holds no Guard.
+inline std::recursive_mutex& library_mutex() {
+  static std::recursive_mutex m;
+  return m;
+}
+class Guard {
+ public:
+  Guard() : lock_(library_mutex()) {}
+
+ private:
+  std::lock_guard<std::recursive_mutex> lock_;
+};
 
 class H {
  public:

@@ -2,6 +2,7 @@
 
 #include "../../core/error.hpp"
 
+#include <atomic>
 #include <cstring>
 #include <filesystem>
 #include <vector>
@@ -262,9 +263,13 @@ H file_access() {
   return fapl;
 }
 
-// The name of every file in memory: one that cannot exist on disk (the core driver refuses to
-// open an image under the name of an existing file; nothing is ever written under it).
-constexpr const char* memory_name = "/dev/null/xpbd-bench-in-memory";
+// A name for a file in memory: one that cannot exist on disk (the core driver refuses to open an
+// image under the name of an existing file; nothing is ever written under it), and another for
+// each file (HDF5 refuses a second file of a name already open: an append holds two at once).
+std::string memory_name() {
+  static std::atomic<long> count{0};
+  return "/dev/null/xpbd-bench-in-memory-" + std::to_string(++count);
+}
 
 // The core driver without a backing store: the file lives in memory only.
 H memory_access() {
@@ -293,18 +298,8 @@ H open_file(const std::string& path) {
 
 H create_memory_file() {
   silence_errors();
-  H f(H5Fcreate(memory_name, H5F_ACC_TRUNC, H5P_DEFAULT, memory_access()), H5Fclose);
+  H f(H5Fcreate(memory_name().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, memory_access()), H5Fclose);
   check_id(f, "create a file in memory");
-  return f;
-}
-
-H open_memory_file(const std::vector<char>& image, const std::string& path) {
-  silence_errors();
-  if (image.empty()) throw Error(path + ": is empty, not an HDF5 file");
-  H fapl = memory_access();
-  check(H5Pset_file_image(fapl, const_cast<char*>(image.data()), image.size()), "file image of " + path);  // copied
-  H f(H5Fopen(memory_name, H5F_ACC_RDWR, fapl), H5Fclose);
-  if (f < 0) throw Error(path + ": not a readable HDF5 results file");
   return f;
 }
 

@@ -52,8 +52,6 @@ H open_file(const std::string& path);
 // memory, twice while its image is taken; results and captured systems are MBs, not GBs.
 // Each file closes strongly: closing it closes every object still open in it.
 H create_memory_file();
-// A read-write copy in memory of `image`, the bytes of `path` (named in the error if they are not HDF5).
-H open_memory_file(const std::vector<char>& image, const std::string& path);
 // The bytes of a file built in memory, flushed first.
 std::vector<char> file_image(hid_t file);
 // Turns off HDF5's printing of error stacks (we report our own messages); idempotent.

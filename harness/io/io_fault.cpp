@@ -20,6 +20,8 @@ struct Faults {
   Fault write, rename;
 };
 
+long write_total = 0;  // every write call, fault or not
+
 Fault parse(const char* var, const std::string& value) {
   if (value.empty()) return {};
   static const struct {
@@ -49,6 +51,7 @@ Faults& faults() {
 
 int next(Fault Faults::*which) {
   std::lock_guard<std::mutex> g(lock);
+  if (which == &Faults::write) ++write_total;
   Fault& f = faults().*which;
   if (f.at == 0) return 0;
   return ++f.calls == f.at ? f.err : 0;
@@ -58,6 +61,11 @@ int next(Fault Faults::*which) {
 
 int next_write() { return next(&Faults::write); }
 int next_rename() { return next(&Faults::rename); }
+
+long write_calls() {
+  std::lock_guard<std::mutex> g(lock);
+  return write_total;
+}
 
 void set(const std::string& write, const std::string& rename) {
   Fault w = parse("XB_FAULT_WRITE", write), r = parse("XB_FAULT_RENAME", rename);

@@ -8,7 +8,7 @@
 namespace xb {
 
 // Writes the vertices x with the problem's surface triangles; a problem without a surface (a
-// chain) gets its distance constraints as PLY edges, through PATH.tmp (atomic_file.hpp). Throws
+// chain) gets its distance constraints as PLY edges, through a temporary file (atomic_file.hpp). Throws
 // WriteError when the file cannot be written.
 void write_ply(const std::string& path, const Problem& prob, const Eigen::Matrix3Xd& x, bool binary = true);
 

@@ -2,6 +2,7 @@
 #include "schema.hpp"
 
 #include "atomic_file.hpp"
+#include "file_lock.hpp"
 #include "h5io.hpp"
 
 #include "../../core/error.hpp"
@@ -18,17 +19,6 @@ namespace xb {
 namespace {
 
 using namespace h5;
-
-void write_run(hid_t file, const RunRecord& r) {
-  H lcpl = link_create_plist();
-  const std::string path = "/runs/" + r.name;
-  if (H5Lexists(file, "/runs", H5P_DEFAULT) > 0 && H5Lexists(file, path.c_str(), H5P_DEFAULT) > 0)
-    throw Error("results file already has a run named '" + r.name + "'");
-  H g(H5Gcreate2(file, path.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
-  check_id(g, "create group " + path);
-  for (const auto& [k, v] : r.attrs) write_attr(g, k, v);
-  for (const auto& [k, v] : r.datasets) write_dataset(g, k, v);
-}
 
 struct Silence {  // HDF5 prints error stacks by default; we report our own messages.
   Silence() { silence_errors(); }
@@ -73,29 +63,58 @@ RunRecord read_run(hid_t runs, const std::string& name, const std::string& where
   return r;
 }
 
+// "<pid>@<host>:<random>": who started a file (its attribute `writer`).
+std::string new_writer_id() { return writer_tag() + ":" + random_hex8(); }
+
+// "pid 123 on host" from a writer id, for messages.
+std::string writer_words(const std::string& id) {
+  const size_t at = id.find('@'), colon = id.rfind(':');
+  if (at == std::string::npos || colon == std::string::npos || colon < at) return "'" + id + "'";
+  return "pid " + id.substr(0, at) + " on " + id.substr(at + 1, colon - at - 1);
+}
+
 }  // namespace
 
-void append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh) {
-  for (const auto& r : runs) check_against_schema(r);
+ResultsWriter::ResultsWriter(std::string path, bool replace)
+    : path_(std::move(path)), id_(new_writer_id()), replace_(replace) {}
+
+std::vector<std::string> ResultsWriter::add(const std::vector<RunRecord>& runs) {
+  for (const auto& r : runs) check_against_schema(r);  // before anything is written
+  make_parent(path_);
+  const FileLock lock(results_lock_path(path_), FileLock::Kind::exclusive, path_);
+  const Guard guard;  // after the file lock (h5handle.hpp)
+  const bool fresh = replace_ && !started_;
   std::error_code ec;
-  const bool append = !fresh && fs::exists(path, ec);
-  std::vector<char> image;
-  {
-    // The new file, in memory; closed (every object in it) before a byte reaches the disk.
-    H file = append ? open_memory_file(read_file(path), path) : create_memory_file();
-    if (!append) {
-      write_attr(file, "schema_version", static_cast<long long>(schema_version));
-      write_attr(file, "generator", std::string("xpbd-bench"));
-    } else if (link_kind(file, "/runs") != Kind::group) {
-      throw Error(path + ": not an xpbd-bench results file (no group /runs); refusing to append to it");
-    }
-    for (const auto& r : runs) write_run(file, r);
-    image = file_image(file);
+  RunFiles made(path_);  // run files of this add: removed again unless the new index links them
+  Index index = !fresh && fs::exists(path_, ec) ? carry_index(path_, made) : new_index(id_);
+  if (replace_ && started_ && index.writer != id_)
+    throw Error(path_ + " was replaced by another writer (" + writer_words(index.writer) +
+                ") after this command's first run; the file is that writer's now");
+  std::vector<std::string> names;
+  int number = next_run_number(index);
+  for (const auto& r : runs) {
+    char head[16];
+    std::snprintf(head, sizeof head, "%04d_", number++);
+    const std::string name = head + r.name;
+    link_run(index, name, made.write(name, [&](hid_t file) { write_run(file, r, name); }));
+    names.push_back(name);
   }
-  write_file_atomically(path, image.data(), image.size());
+  commit_index(path_, index);
+  made.keep();
+  started_ = true;
+  held_ = static_cast<int>(index.names.size());
+  collect_garbage(path_, index, fresh);
+  return names;
+}
+
+std::vector<std::string> append_runs(const std::string& path, const std::vector<RunRecord>& runs, bool fresh) {
+  ResultsWriter w(path, fresh);
+  return w.add(runs);
 }
 
 std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets, std::vector<std::string>* skipped) {
+  const FileLock lock(results_lock_path(path), FileLock::Kind::shared, path);
+  const Guard guard;
   H file = open_file(path);
   const Kind k = link_kind(file, "/runs");
   if (k == Kind::missing) throw Error(path + ": not an xpbd-bench results file (no group /runs)");
@@ -116,6 +135,29 @@ std::vector<RunRecord> read_runs(const std::string& path, bool with_datasets, st
 int count_runs(const std::string& path) {
   if (!fs::exists(path)) return 0;
   return static_cast<int>(read_runs(path, false).size());
+}
+
+std::vector<std::string> pack_runs(const std::string& src, const std::string& dst) {
+  std::vector<char> image;
+  std::vector<std::string> skipped;
+  {
+    const FileLock lock(results_lock_path(src), FileLock::Kind::shared, src);
+    const Guard guard;
+    image = packed_image(src, skipped);
+  }
+  make_parent(dst);
+  if (!fs::exists(runs_folder(dst))) {
+    write_file_atomically(dst, image.data(), image.size());
+    return skipped;
+  }
+  // dst was a file of run files: replaced under its lock, its run files removed with it.
+  const FileLock lock(results_lock_path(dst), FileLock::Kind::exclusive, dst);
+  TmpFile out(dst, dst, true);
+  out.write(image.data(), image.size());
+  out.commit();
+  const Guard guard;
+  collect_garbage(dst, new_index(""), true);
+  return skipped;
 }
 
 }  // namespace xb

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <variant>
 
 #ifndef XB_GIT_SHA
 #define XB_GIT_SHA "unknown"
@@ -90,6 +91,45 @@ void add_provenance(RunRecord& r, const Params& p) {
 }
 
 namespace {
+// The per-iteration arrays of the log, by dataset name (results/README.md); global_only: written
+// for global methods only (the linear solve's, the step's).
+using LogMember = std::variant<std::vector<double> IterationLog::*, std::vector<long long> IterationLog::*,
+                               std::vector<std::string> IterationLog::*>;
+struct LogArray {
+  const char* name;
+  LogMember member;
+  bool global_only;
+};
+const LogArray log_arrays[] = {
+    {"frame", &IterationLog::frame, false},
+    {"substep", &IterationLog::substep, false},
+    {"iteration", &IterationLog::iteration, false},
+    {"dual_residual", &IterationLog::dual_residual, false},
+    {"relative_dual_residual", &IterationLog::relative_dual_residual, false},
+    {"authors_dual_residual", &IterationLog::authors_dual_residual, false},
+    {"authors_relative_dual_residual", &IterationLog::authors_relative_dual_residual, false},
+    {"primal_residual", &IterationLog::primal_residual, false},
+    {"newton_residual", &IterationLog::newton_residual, false},
+    {"relative_newton_residual", &IterationLog::relative_newton_residual, false},
+    {"energy", &IterationLog::energy, false},
+    {"wall_time", &IterationLog::wall_time, false},
+    {"step_time", &IterationLog::step_time, false},
+    {"step_length", &IterationLog::step_length, true},
+    {"line_search_trials", &IterationLog::line_search_trials, true},
+    {"exact_hessian", &IterationLog::exact_hessian, true},
+    {"projected_elements", &IterationLog::projected_elements, true},
+    {"fill_time", &IterationLog::fill_time, true},
+    {"linear_iterations", &IterationLog::linear_iterations, true},
+    {"linear_setup_time", &IterationLog::linear_setup_time, true},
+    {"linear_solve_time", &IterationLog::linear_solve_time, true},
+    {"linear_relative_residual", &IterationLog::linear_relative_residual, true},
+    {"linear_tolerance", &IterationLog::linear_tolerance, true},
+    {"linear_setup_action", &IterationLog::linear_setup_action, true},
+    {"linear_history/residual", &IterationLog::linear_history_residual, true},
+    {"linear_history/time", &IterationLog::linear_history_time, true},
+    {"linear_history/offset", &IterationLog::linear_history_offset, true},
+};
+
 // The Newton residual's last entry, and where every α̃ > 0 what the reference's ‖∇E‖ reached
 // (issue 30's records; results/README.md).
 void add_newton_attributes(RunRecord& r, const IterationLog& L) {
@@ -154,36 +194,10 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   for (const auto& [k, v] : res.stats) r.attrs[k] = v;
   for (const auto& [k, v] : res.arrays) r.datasets[k] = v;
   const IterationLog& L = res.log;
-  r.datasets["frame"] = L.frame;
-  r.datasets["substep"] = L.substep;
-  r.datasets["iteration"] = L.iteration;
-  r.datasets["dual_residual"] = L.dual_residual;
-  r.datasets["relative_dual_residual"] = L.relative_dual_residual;
-  r.datasets["authors_dual_residual"] = L.authors_dual_residual;
-  r.datasets["authors_relative_dual_residual"] = L.authors_relative_dual_residual;
-  r.datasets["primal_residual"] = L.primal_residual;
-  r.datasets["newton_residual"] = L.newton_residual;
-  r.datasets["relative_newton_residual"] = L.relative_newton_residual;
-  r.datasets["energy"] = L.energy;
-  r.datasets["wall_time"] = L.wall_time;
-  r.datasets["step_time"] = L.step_time;
   const MethodInfo* m = find_method(method);
-  if (m && !m->local) {
-    r.datasets["step_length"] = L.step_length;
-    r.datasets["line_search_trials"] = L.line_search_trials;
-    r.datasets["exact_hessian"] = L.exact_hessian;
-    r.datasets["projected_elements"] = L.projected_elements;
-    r.datasets["fill_time"] = L.fill_time;
-    r.datasets["linear_iterations"] = L.linear_iterations;
-    r.datasets["linear_setup_time"] = L.linear_setup_time;
-    r.datasets["linear_solve_time"] = L.linear_solve_time;
-    r.datasets["linear_relative_residual"] = L.linear_relative_residual;
-    r.datasets["linear_tolerance"] = L.linear_tolerance;
-    r.datasets["linear_setup_action"] = L.linear_setup_action;
-    r.datasets["linear_history/residual"] = L.linear_history_residual;
-    r.datasets["linear_history/time"] = L.linear_history_time;
-    r.datasets["linear_history/offset"] = L.linear_history_offset;
-  }
+  const bool global = m && !m->local;
+  for (const auto& a : log_arrays)
+    if (!a.global_only || global) std::visit([&](auto member) { r.datasets[a.name] = L.*member; }, a.member);
   r.datasets["substep_status"] = L.substep_status;
   if (!L.relative_gradient_floor.empty()) {  // step = newton
     r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;

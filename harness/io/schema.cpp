@@ -28,7 +28,7 @@ const ResultsSchema& results_schema() {
       expand({
           {"any", "string", {"level", "scene", "solver", "form_used", "status", "message", "git_sha", "machine", "created", "omp_wait_policy", "omp_spin_count"}},
           {"any", "int", {"omp_threads", "cpu_count", "blas_threads"}},
-          {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "factorisations", "factorise_time_total", "analyse_time_total", "lagged_setups", "refactorisations_in_solve", "mpi_ranks", "setup_count", "refresh_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "single_precision", "primal_rows", "primal_nonzeros"}},
+          {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "factorisations", "factorise_time_total", "analyse_time_total", "lagged_setups", "refactorisations_in_solve", "mpi_ranks", "setup_count", "refresh_count", "reuse_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "single_precision", "primal_rows", "primal_nonzeros"}},
           {"any", "number", {"rows"}},
           {"simulation", "string", {"profile", "reference_method", "sweep_spec", "sweep_description", "sweep_params", "sweep_point", "sweep_key", "sweep_base"}},
           {"simulation", "int", {"outer_iterations", "substeps_total", "substeps_converged", "reference", "reference_substeps_unconverged", "sweep_index", "sweep_repeat"}},

@@ -19,6 +19,7 @@ using h5::H;
 void write_state(const std::string& path, const SimState& s, const Params& p) {
   std::vector<char> image;
   {
+    const h5::Guard guard;  // h5handle.hpp
     H file = h5::create_memory_file();  // written by us, whole or not at all (h5io.hpp)
     RunRecord r;  // the parameters and provenance, as for a run
     add_provenance(r, p);
@@ -36,6 +37,7 @@ void write_state(const std::string& path, const SimState& s, const Params& p) {
 
 SimState read_state(const std::string& path) {
   const std::string where = "--load-state: " + path;
+  const h5::Guard guard;
   std::optional<H> file;
   try {
     file.emplace(h5::open_file(path));

@@ -16,7 +16,7 @@ struct SimState {
   Eigen::Matrix3Xd x, v;
 };
 
-// Writes through FILE.tmp and a rename. Records the scene and its parameters as attributes.
+// Writes through a temporary file and a rename (atomic_file.hpp). Records the scene and its parameters as attributes.
 void write_state(const std::string& path, const SimState& s, const Params& p);
 // Reads a state file; throws xb::Error naming the file for anything that is not one.
 SimState read_state(const std::string& path);

@@ -142,6 +142,7 @@ void write_system_h5(TmpFile& out, const CapturedSystem& sys) {
   const SparseMatrix& A = sys.A;
   const Vector& b = sys.b;
   if (A.rows() != A.cols() || A.rows() != b.size()) throw Error("write_system_h5: A is not square or b has the wrong size");
+  const Guard guard;  // h5handle.hpp
   if (!A.isCompressed()) throw Error("write_system_h5: A must be compressed");
   std::vector<char> image;
   {
@@ -174,6 +175,7 @@ void write_system_h5(const std::string& path, const CapturedSystem& sys) {
 }
 
 CapturedSystem read_system_h5(const std::string& path) {
+  const Guard guard;
   H file = open_file(path);
   CapturedSystem s;
   s.attrs = read_attrs(file, path + ": root");
@@ -203,7 +205,7 @@ CapturedSystem read_system_h5(const std::string& path) {
 }
 
 std::vector<std::string> write_captured_system(const std::string& prefix, const CapturedSystem& sys) {
-  // Every file is written to its .tmp first and only then are they renamed, so a full disk
+  // Every file is written to its temporary file first and only then are they renamed, so a full disk
   // leaves the files of an earlier capture with this prefix as they were, all of them.
   make_parent(prefix);
   std::vector<std::unique_ptr<TmpFile>> files;

@@ -1,6 +1,7 @@
 // The commands as the Python package calls them: the same functions as the CLI (one way to run,
 // capture and solve), with the call's Python solvers registered as py:<name> methods while it runs
-// and the GIL released for the whole command.
+// and the GIL released for the whole command: several threads may run commands at once (libhdf5,
+// not thread-safe here, is entered under one lock, harness/io/h5handle.hpp).
 #include "bindings.hpp"
 #include "convert.hpp"
 #include "py_solver.hpp"
@@ -15,7 +16,6 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
-#include <cstdio>
 #include <map>
 
 namespace xb::py {
@@ -55,7 +55,8 @@ class ScopedSolvers {
 
 const std::map<std::string, int (*)(const CommandArgs&)>& command_table() {
   static const std::map<std::string, int (*)(const CommandArgs&)> t = {
-      {"run", cmd_run}, {"capture", cmd_capture}, {"solve", cmd_solve}, {"report", cmd_report}, {"sweep", cmd_sweep}};
+      {"run", cmd_run},       {"capture", cmd_capture}, {"solve", cmd_solve},
+      {"report", cmd_report}, {"sweep", cmd_sweep},     {"pack", cmd_pack}};
   return t;
 }
 
@@ -101,7 +102,11 @@ nb::list parameter_list() {
 
 nb::list read(const std::string& path) {
   std::vector<std::string> skipped;
-  const std::vector<RunRecord> runs = read_runs(path, true, &skipped);
+  std::vector<RunRecord> runs;
+  {
+    nb::gil_scoped_release release;  // other threads go on while this one waits for a writer or reads
+    runs = read_runs(path, true, &skipped);
+  }
   for (const auto& s : skipped)
     if (PyErr_WarnEx(PyExc_RuntimeWarning, ("xpbd_bench.read: skipped: " + s).c_str(), 1) != 0) throw nb::python_error();
   nb::list l;
@@ -109,27 +114,11 @@ nb::list read(const std::string& path) {
   return l;
 }
 
-// Every run of `src` appended to `dst` (created when absent), renumbered after dst's runs
-// (names are NNNN_<scene>_<solver>): what xpbd_bench.run does with an existing out.
-int append_results(const std::string& src, const std::string& dst) {
-  std::vector<RunRecord> runs = read_runs(src, true);
-  const int existing = count_runs(dst);  // throws for a file that is not a results file
-  for (size_t i = 0; i < runs.size(); ++i) {
-    const std::string& n = runs[i].name;
-    const size_t cut = n.find('_');
-    char index[16];
-    std::snprintf(index, sizeof index, "%04d", existing + static_cast<int>(i) + 1);
-    runs[i].name = index + (cut == std::string::npos ? "_" + n : n.substr(cut));
-  }
-  if (!runs.empty()) append_runs(dst, runs, false);
-  return existing + static_cast<int>(runs.size());
-}
-
 }  // namespace
 
 void bind_api(nb::module_& m) {
   m.def("command", &command, nb::arg("name"), nb::arg("args"), nb::arg("solvers"),
-        "Runs an xpbd-bench command (run, capture, solve, report, sweep) with CLI arguments; the protocol objects "
+        "Runs an xpbd-bench command (run, capture, solve, report, sweep, pack) with CLI arguments; the protocol objects "
         "in `solvers` are the methods py:<name> meanwhile. Returns the exit code; bad input raises xpbd_bench.Error.");
   m.def("protocol_name", &protocol_name, nb::arg("solver"),
         "py:<name> for an object of the solver protocol; raises Error naming what it lacks.");
@@ -138,8 +127,6 @@ void bind_api(nb::module_& m) {
   m.def("parameters", &parameter_list, "Every parameter key: key, default, doc.");
   m.def("count_runs", &count_runs, nb::arg("path"),
         "The number of runs in a results file (0 if absent); raises Error for a file that is not one.");
-  m.def("append_results", &append_results, nb::arg("src"), nb::arg("dst"),
-        "Appends every run of results file src to dst, numbered after dst's; returns dst's run count.");
   m.def("read", &read, nb::arg("path"), "Every run of a results file as a dict of its attributes and datasets.");
 }
 

@@ -6,10 +6,12 @@
     sys = xb.capture("cloth_hang", frame=0, iteration=0, set={"resolution": 16})
     xb.solve(sys, solvers=["cholmod", MySolver()], form="primal", tol=1e-8, out="s.h5")
     runs = xb.read("r.h5")
+    xb.pack("r.h5", "one.h5")                            # every run in one file, to hand on
 
 A solver is any object with `name`, `setup(A, info)` and `solve(b, tol)` returning x or
 (x, iterations); it runs inside the C++ stepper as the method py:<name>. run, capture and solve
-are the CLI's commands (same checks, same files, same records). xpbd_bench.gpu.MgpbdGpu is mgpbd
+are the CLI's commands (same checks, same files, same records); calls from several threads at
+once are safe, and many processes may append to one results file (docs/failures.md). xpbd_bench.gpu.MgpbdGpu is mgpbd
 with its solve phase on a GPU (docs/gpu.md); amg_hierarchy gives mgpbd's levels.
 
 Without the built module _core, only the modules that do not need it import (xpbd_bench.gpu's
@@ -48,7 +50,7 @@ else:
     from .amg import AmgHierarchy, amg_hierarchy, export_hierarchy  # noqa: E402
 
 __all__ = ["Error", "WriteError", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read",
-           "load_system", "AmgHierarchy", "amg_hierarchy", "export_hierarchy"]
+           "pack", "load_system", "AmgHierarchy", "amg_hierarchy", "export_hierarchy"]
 
 
 def solvers():
@@ -112,30 +114,20 @@ def _call(name, args, objects, progress):
 
 def run(scene, solvers, out, frames=None, set=None, form=None, profile=None, time_budget=None, reference=False,
         progress=False):
-    """`xpbd-bench run`: each solver (a built-in name or a protocol object) on the scene, every run
-    appended to `out` (an existing results file keeps its runs, the new ones numbered after them;
-    the CLI's `run` replaces its --out instead). `set`: any parameter keys ({"mesh": "bunny:12k",
-    "linear.tol": 1e-2}); `form`: "dual", "primal" or "dual,primal" (--form). Returns read(out)."""
+    """`xpbd-bench run --append`: each solver (a built-in name or a protocol object) on the scene,
+    each run appended to `out` as it ends (an existing results file keeps its runs, the new ones
+    numbered after them; the CLI's `run` without --append replaces its --out instead). `set`: any
+    parameter keys ({"mesh": "bunny:12k", "linear.tol": 1e-2}); `form`: "dual", "primal" or
+    "dual,primal" (--form). A failed write raises WriteError naming `out`, which keeps the runs
+    finished before. Returns read(out)."""
     names, objects = _methods(solvers)
     out = os.fspath(out)
-    if os.path.exists(out):
-        _core.count_runs(out)  # refuses a file that is not a results file, before anything runs
-        with tempfile.TemporaryDirectory(prefix="xpbd_bench_run_", dir=os.path.dirname(os.path.abspath(out))) as d:
-            part = os.path.join(d, "runs.h5")
-            try:
-                _run(scene, names, objects, part, frames, set, form, profile, time_budget, reference, progress)
-            except WriteError as e:  # the new runs go to a part first: name the file the caller gave
-                e.args = (str(e).replace(part, out),)
-                e.filename = out
-                raise
-            _core.append_results(part, out)
-        return read(out)
     _run(scene, names, objects, out, frames, set, form, profile, time_budget, reference, progress)
     return read(out)
 
 
 def _run(scene, names, objects, out, frames, set, form, profile, time_budget, reference, progress):
-    args = ["--scene", str(scene), "--solver", names, "--out", out] + _sets(set)
+    args = ["--scene", str(scene), "--solver", names, "--out", out, "--append"] + _sets(set)
     if frames is not None:
         args += ["--frames", str(frames)]
     if form is not None:
@@ -171,9 +163,10 @@ def capture(scene, frame, iteration, substep=0, set=None, solver="cholmod", out=
     return system
 
 
-def solve(system, solvers, out, form=None, tol=None, set=None, progress=False):
+def solve(system, solvers, out, form=None, tol=None, set=None, append=False, progress=False):
     """`xpbd-bench solve`: each solver on a captured system (a System or its .h5 path) from a fresh
-    instance, against the direct reference. Returns read(out)."""
+    instance, against the direct reference; `out` is replaced, or added to with append=True
+    (--append). Returns read(out)."""
     path = system.path if isinstance(system, System) else os.fspath(system)
     names, objects = _methods(solvers)
     args = ["--system", path, "--solver", names, "--out", os.fspath(out)] + _sets(set)
@@ -181,5 +174,14 @@ def solve(system, solvers, out, form=None, tol=None, set=None, progress=False):
         args += ["--form", form]
     if tol is not None:
         args += ["--tol", _value(tol)]
+    if append:
+        args.append("--append")
     _call("solve", args, objects, progress)
+    return read(out)
+
+
+def pack(path, out):
+    """`xpbd-bench pack`: every run of the results file `path` (an index and its folder PATH.runs/)
+    in one self-contained file `out`, to hand to someone. Returns read(out)."""
+    _call("pack", [os.fspath(path), "--out", os.fspath(out)], [], True)
     return read(out)

@@ -18,6 +18,12 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
+from .gpu_kernels import Csr, NodeInverse, make_ops
+
+# The device scalars' slots (gpu_kernels.SLOTS): the V-cycle's ‖b‖∞, PCG's ‖b‖, p'Ap, the
+# residual norm, and r'z in two slots (the new one is written while the old one is still read).
+SCALE, BNORM, PAP, RNORM, RZ = 0, 1, 2, 3, (4, 5)
+
 
 class Backend:
     """The array module: CuPy (+ cupyx.scipy.sparse) on a device, else NumPy (+ scipy.sparse)."""
@@ -36,6 +42,7 @@ class Backend:
             self.reason = why
         self.device = self.xp is not np
         self.name = "cupy" if self.device else "numpy"
+        self.ops = make_ops(self)  # the solve phase's operations, counted (gpu_kernels.py)
 
     def synchronize(self):
         if self.device:
@@ -81,27 +88,21 @@ def device_info():
     return found is not None, why
 
 
-def block_diagonal(node_start, block_inv, n):
-    """The node blocks D_I⁻¹ (row-major, node after node) as one block-diagonal CSR matrix."""
-    start = np.asarray(node_start, dtype=np.int64)
-    sizes = np.diff(start)
-    node_of_row = np.repeat(np.arange(len(sizes)), sizes)
-    row_len = sizes[node_of_row]
-    indptr = np.concatenate([[0], np.cumsum(row_len)])
-    first = np.repeat(start[node_of_row], row_len)
-    within = np.arange(indptr[-1]) - np.repeat(indptr[:-1], row_len)
-    return scipy.sparse.csr_matrix((np.asarray(block_inv), first + within, indptr), shape=(n, n))
-
-
 class _Level:
-    """A level on the backend: A (and P, R to the next level) in the V-cycle's dtype, its smoother."""
+    """A level on the backend: A (and P, R to the next level) in the V-cycle's dtype, D⁻¹ by nodes,
+    and its work vectors (b, r, d; x double-buffered: a smoother step reads x while it writes the
+    next one)."""
 
     def __init__(self, be, level, dtype):
-        self.A = be.csr(level["A"], dtype)
-        self.P = be.csr(level["P"], dtype) if level.get("P") is not None else None
-        self.R = be.csr(level["R"], dtype) if level.get("R") is not None else None
+        xp = be.xp
+        self.A = Csr(xp, level["A"], dtype)
+        self.P = Csr(xp, level["P"], dtype) if level.get("P") is not None else None
+        self.R = Csr(xp, level["R"], dtype) if level.get("R") is not None else None
+        n = self.A.shape[0]
+        self.b, self.r, self.d = (xp.zeros(n, dtype) for _ in range(3))
+        self.xs, self.cur = [xp.zeros(n, dtype), xp.zeros(n, dtype)], 0  # x is xs[cur]
         s = level.get("smoother")
-        self.steps, self.sweeps, self.Dinv, self.dinv = [], 0, None, None
+        self.steps, self.sweeps, self.S = [], 0, None
         if s is None:
             return
         if not s["polynomial"]:
@@ -109,35 +110,31 @@ class _Level:
                              f"block_chebyshev), not amg.smoother={s['kind']}")
         self.steps = [(float(c1), float(c2)) for c1, c2 in np.asarray(s["steps"]).reshape(-1, 2)]
         self.sweeps = int(s["sweeps"])
-        if s.get("node_start") is None:
-            self.dinv = be.array(s["inv_diag"], dtype)
-        else:
-            self.Dinv = be.csr(block_diagonal(s["node_start"], s["block_inv"], self.A.shape[0]), dtype)
+        self.S = NodeInverse(xp, s, n, dtype)
 
-    def apply_dinv(self, r):
-        return self.dinv * r if self.Dinv is None else self.Dinv @ r
+    @property
+    def x(self):
+        return self.xs[self.cur]
 
-    def smooth(self, b, x):
-        """`sweeps` sweeps of the steps: d = c1·d + c2·D⁻¹(b − A x), x += d (x None: from zero)."""
-        d = None
+    def smooth(self, ops, b, from_zero):
+        """`sweeps` sweeps of the steps: d = c1·d + c2·D⁻¹(b − A x), x += d, one launch each
+        (from_zero: x = 0 on entry, the first step reads b only). Returns x."""
+        if from_zero:
+            self.cur = 0
         for _ in range(self.sweeps):
             for c1, c2 in self.steps:
-                if x is None:  # from zero: d = c2·D⁻¹b, no product with A
-                    d = c2 * self.apply_dinv(b)
-                    x = d.copy()
-                    continue
-                t = self.apply_dinv(b - self.A @ x)
-                d = c2 * t if c1 == 0 else c1 * d + c2 * t
-                x += d
-        return x
+                ops.relax(self.S, self.A, b, None if from_zero else self.x, self.d, self.xs[1 - self.cur], c1, c2)
+                self.cur, from_zero = 1 - self.cur, False
+        return self.x
 
 
 class DeviceHierarchy:
     """The exported levels (a dict: AmgHierarchy.export() or gpu_bench's read from a capture) on
-    the backend; vcycle(b) is Hierarchy::vcycle."""
+    the backend; vcycle(b) is Hierarchy::vcycle in the backend's counted operations (ops)."""
 
     def __init__(self, export, backend):
         self.be = be = backend
+        self.ops = backend.ops
         self.precision = export["precision"]
         self.dtype = np.float32 if self.precision == "single" else np.float64
         self.coarse_solver = export["coarse_solver"]
@@ -145,6 +142,7 @@ class DeviceHierarchy:
         self.levels = [_Level(be, L, self.dtype) for L in levels[:-1]]
         self.rows = [int(L["A"].shape[0]) for L in levels]
         self.nnz = [int(L["A"].nnz) for L in levels]
+        self.coarse_b = be.xp.zeros(self.rows[-1], self.dtype)
         self._set_coarse(levels[-1])
 
     def _set_coarse(self, level):
@@ -162,76 +160,100 @@ class DeviceHierarchy:
             self.coarse_lu = scipy.sparse.linalg.splu(scipy.sparse.csc_matrix(level["A"]))
 
     def coarse(self, b):
+        """The coarsest solve in double of b (in the V-cycle's dtype); x in the V-cycle's dtype."""
+        ops = self.ops
+        b64 = b if b.dtype == np.float64 else ops.cast(b, np.float64)
         if self.coarse_level is not None:
-            return self.coarse_level.smooth(b, None)
-        if self.coarse_inv is not None:
-            return self.coarse_inv @ b
-        return self.be.array(self.coarse_lu.solve(self.be.host(b)), np.float64)
+            x = self.coarse_level.smooth(ops, b64, True)
+        elif self.coarse_inv is not None:
+            x = ops.dense_gemv(self.coarse_inv, b64)
+        else:
+            ops.syncs += 1  # a solve on the host
+            x = self.be.array(self.coarse_lu.solve(self.be.host(b64)), np.float64)
+        return x if x.dtype == self.dtype else ops.cast(x, self.dtype)
 
-    def vcycle(self, b):
-        """One V-cycle from x = 0 (Algorithm 2) of a double vector b; returns x in double."""
-        xp = self.be.xp
+    def vcycle(self, b, out=None):
+        """One V-cycle from x = 0 (Algorithm 2) of a double vector b, into out (double; new if
+        None). The float V-cycle runs on b/‖b‖∞ and scales back (vcycle.cpp), ‖b‖∞ staying on
+        the device."""
+        ops, xp = self.ops, self.be.xp
+        out = xp.empty_like(b) if out is None else out
         if not self.levels:
-            return self.coarse(b)
-        scale = 1.0
+            ops.copy(self.coarse(b), out)
+            return out
+        L0 = self.levels[0]
         if self.dtype == np.float32:
-            # vcycle.cpp: the float V-cycle runs on b/‖b‖∞ and scales back.
-            scale = float(xp.max(xp.abs(b)))
-            if not (scale > 0) or not math.isfinite(scale):
-                return xp.zeros_like(b) if scale == 0 else xp.full_like(b, scale)
-        rhs, sol = [(b / scale).astype(self.dtype)], []
-        for L in self.levels:
-            x = L.smooth(rhs[-1], None)
-            sol.append(x)
-            rhs.append(L.R @ (rhs[-1] - L.A @ x))
-        xc = self.coarse(rhs[-1].astype(np.float64)).astype(self.dtype)
-        for l in range(len(self.levels) - 1, -1, -1):
-            L = self.levels[l]
-            sol[l] += L.P @ xc
-            xc = L.smooth(rhs[l], sol[l])
-        return scale * xc.astype(np.float64)
+            ops.reduce(b, None, SCALE, 2)
+            ops.scale_in(b, L0.b, SCALE)
+        else:
+            ops.copy(b, L0.b)
+        for l, L in enumerate(self.levels):
+            L.smooth(ops, L.b, True)
+            ops.residual(L.A, L.x, L.b, L.r)
+            ops.spmv(L.R, L.r, self.levels[l + 1].b if l + 1 < len(self.levels) else self.coarse_b)
+        xc = self.coarse(self.coarse_b)
+        for L in reversed(self.levels):
+            ops.spmv(L.P, xc, L.x, add=True)
+            xc = L.smooth(ops, L.b, False)
+        if self.dtype == np.float32:
+            ops.scale_out(xc, out, SCALE)
+        else:
+            ops.copy(xc, out)
+        return out
 
 
-def pcg(A, b, precond, tol, max_iterations, xp, rel=None, natural_norm=False):
-    """solvers/krylov/pcg.cpp's loop: from x = 0 to ‖r‖₂ ≤ tol·‖b‖₂ (rel(r): the relative residual
-    measured instead, e.g. the dual one of a primal residual; natural_norm: √(rᵀM⁻¹r) ≤ tol·√(r₀ᵀM⁻¹r₀)).
-    Returns (x, iterations, status)."""
-    x = xp.zeros_like(b)
-    r = b.copy()
-    bnorm = float(xp.linalg.norm(b))
+def pcg(A, b, precond, tol, max_iterations, ops, dual_map=None, dual_scale=1.0, natural_norm=False):
+    """solvers/krylov/pcg.cpp's loop on the backend: from x = 0 to ‖r‖₂ ≤ tol·‖b‖₂; with dual_map
+    (a Csr G) to ‖G r‖₂/dual_scale ≤ tol (the dual residual of a primal residual); natural_norm:
+    √(rᵀM⁻¹r) ≤ tol·√(r₀ᵀM⁻¹r₀). A: a Csr; b: a double vector on the backend; precond(r, z)
+    writes M⁻¹r into z. The scalars stay on the device; the host reads them once per iteration
+    (twice with natural_norm). Returns (x, iterations, status)."""
+    xp = ops.xp
+    x, r, z, p, Ap = xp.zeros_like(b), xp.empty_like(b), xp.empty_like(b), xp.empty_like(b), xp.empty_like(b)
+    Gr = xp.empty(dual_map.shape[0], dtype=b.dtype) if dual_map is not None else None
+    ops.reduce(b, b, BNORM, 1)
+    bnorm = float(ops.read()[BNORM])
     if not math.isfinite(bnorm):
         return x, 0, "breakdown"
     if bnorm == 0:
         return x, 0, "converged"
-    z = precond(r)
-    p = z.copy()
-    rz = float(xp.dot(r, z))
-    rz0, status, its = rz, "max_iterations", 0
+    ops.copy(b, r)
+    precond(r, z)
+    ops.copy(z, p)
+    rz, rz_new = RZ
+    ops.reduce(r, z, rz, 0)
+    status, its, rz0 = "max_iterations", 0, None
     for k in range(max_iterations):
-        Ap = A @ p
-        pAp = float(xp.dot(p, Ap))
-        if not (pAp > 0) or not math.isfinite(pAp) or not (rz > 0):
+        ops.spmv(A, p, Ap)
+        ops.reduce(p, Ap, PAP, 0)
+        ops.update_xr(x, r, p, Ap, rz, PAP)  # a no-op where the host then finds a breakdown
+        if Gr is not None:
+            ops.spmv(dual_map, r, Gr)
+            ops.reduce(Gr, Gr, RNORM, 1)
+        else:
+            ops.reduce(r, r, RNORM, 1)
+        s = ops.read()
+        rz0 = s[rz] if rz0 is None else rz0
+        if not (s[PAP] > 0) or not math.isfinite(s[PAP]) or not (s[rz] > 0):
             status = "breakdown"
             break
-        alpha = rz / pAp
-        x += alpha * p
-        r -= alpha * Ap
         its = k + 1
-        rnorm = rel(r) * bnorm if rel is not None else math.sqrt(float(xp.dot(r, r)))
+        rnorm = s[RNORM] / dual_scale * bnorm if Gr is not None else s[RNORM]
         if not math.isfinite(rnorm):
             status = "breakdown"
             break
         if not natural_norm and rnorm <= tol * bnorm:
             status = "converged"
             break
-        z = precond(r)
-        rz_new = float(xp.dot(r, z))
-        if natural_norm and rz_new >= 0 and math.sqrt(rz_new) <= tol * math.sqrt(rz0):
-            status = "converged"
-            break
-        beta = rz_new / rz
-        rz = rz_new
-        p = z + beta * p
+        precond(r, z)
+        ops.reduce(r, z, rz_new, 0)
+        if natural_norm:
+            v = ops.read()[rz_new]
+            if v >= 0 and math.sqrt(v) <= tol * math.sqrt(rz0):
+                status = "converged"
+                break
+        ops.update_p(p, z, rz_new, rz)
+        rz, rz_new = rz_new, rz
     return x, its, status
 
 
@@ -279,12 +301,12 @@ class MgpbdGpu:
             self.pattern, self.last_frame = pattern, info["frame"]
             self.setups += 1
         self.device = DeviceHierarchy(self.hierarchy.export(), self.backend)
-        self.A = self.backend.csr(A, np.float64)
+        self.A = Csr(self.backend.xp, A, np.float64)
         self.backend.synchronize()
 
     def solve(self, b, tol):
         be = self.backend
-        x, its, _ = pcg(self.A, be.array(b, np.float64), self.device.vcycle, tol, self.max_iterations, be.xp)
+        x, its, _ = pcg(self.A, be.array(b, np.float64), self.device.vcycle, tol, self.max_iterations, be.ops)
         be.synchronize()  # the harness's clock reads after this returns
         self.iterations.append(its)
         return be.host(x), its

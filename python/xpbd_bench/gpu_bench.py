@@ -10,7 +10,9 @@ tolerance (iterations, time per iteration and per solve, the relative residual; 
 stops on the dual residual, as mgpbd does with linear.stop_norm = dual); the bytes a V-cycle moves
 against the measured device-to-device copy bandwidth; and, per capture, CG with a Jacobi
 preconditioner on the dual system (cupyx's, or scipy's on NumPy) as the baseline. Without a
-device it runs on NumPy, its timings marked as CPU ones (backend "numpy").
+device it runs on NumPy, its timings marked as CPU ones (backend "numpy"); --backend cupy makes a
+missing CuPy or device an error instead. Each solve also reports the kernel launches and blocking
+host reads it made (counted by the backend's operations, gpu_kernels.py: the same count on NumPy).
 """
 import argparse
 import json
@@ -24,6 +26,7 @@ import scipy.sparse
 
 from . import hierarchy_io
 from .gpu import Backend, DeviceHierarchy, pcg
+from .gpu_kernels import Csr
 
 LOOSE_TOL = 0.1  # the race's loosest inner tolerance: linear.forcing_max (docs/race.md)
 
@@ -62,7 +65,7 @@ def vcycle_bytes(dh):
     for L in dh.levels:
         n = L.A.shape[0]
         passes = L.sweeps * len(L.steps)
-        dinv = csr_bytes(L.Dinv, vb) if L.Dinv is not None else n * vb
+        dinv = L.S.block_inv.size * vb + L.S.nodes * 12  # blocks, node starts and offsets
         total += (2 * passes) * (csr_bytes(L.A, vb) + dinv + 4 * n * vb)
         total += csr_bytes(L.R, vb) + csr_bytes(L.P, vb) + 4 * n * vb
     if dh.coarse_inv is not None:
@@ -94,28 +97,36 @@ def refresh(be, dh, export):
 
 def solve_system(be, path, form, tols, repeat, maxit):
     export, data = hierarchy_io.read(path, form)
-    t_transfer, dh = timed(be, lambda: (DeviceHierarchy(export, be), be.csr(data["matrix"], np.float64)))
+    t_transfer, dh = timed(be, lambda: (DeviceHierarchy(export, be), Csr(be.xp, data["matrix"], np.float64)))
     dh, A = dh
     b = be.array(data["rhs"], np.float64)
-    rel = None
+    G, dual_norm = None, 1.0
     if "dual_map" in data:  # the primal form stops on the dual residual −J M⁻¹ r_K
-        G = be.csr(data["dual_map"], np.float64)
+        G = Csr(be.xp, data["dual_map"], np.float64)
         dual_norm = float(np.linalg.norm(data["dual_rhs"]))
-        rel = lambda r: float(be.xp.linalg.norm(G @ r)) / dual_norm  # noqa: E731
     t_up, t_rap, rap_diff = refresh(be, dh, export)
     t_vc, _ = timed(be, lambda: dh.vcycle(b), repeat=max(repeat, 3))
+    ops = be.ops
+    ops.reset_counts()
+    dh.vcycle(b)
+    vcycle_launches = ops.launches
     out = {"capture": os.path.basename(path), "form": form, "rows": dh.rows[0], "nnz": dh.nnz[0],
            "level_rows": dh.rows, "level_nnz": dh.nnz, "precision": dh.precision,
            "transfer_seconds": t_transfer, "refresh_upload_seconds": t_up, "refresh_galerkin_seconds": t_rap,
-           "refresh_galerkin_max_rel_diff": rap_diff, "vcycle_seconds": t_vc, "vcycle_bytes": vcycle_bytes(dh),
+           "refresh_galerkin_max_rel_diff": rap_diff, "vcycle_seconds": t_vc, "vcycle_bytes": vcycle_bytes(dh), "vcycle_launches": vcycle_launches,
            "solves": []}
     for tol in tols:
-        t, (x, its, status) = timed(be, lambda: pcg(A, b, dh.vcycle, tol, maxit, be.xp, rel=rel), repeat=repeat)
-        r = b - A @ x
+        ops.reset_counts()
+        t, (x, its, status) = timed(be, lambda: pcg(A, b, dh.vcycle, tol, maxit, ops, dual_map=G, dual_scale=dual_norm),
+                                    repeat=repeat)
+        launches, syncs = ops.launches / repeat, ops.syncs / repeat
+        r = ops.residual(A, x, b, be.xp.empty_like(b))
         res = float(be.xp.linalg.norm(r)) / float(be.xp.linalg.norm(b))
+        dual = float(be.xp.linalg.norm(ops.spmv(G, r, be.xp.empty(G.shape[0])))) / dual_norm if G is not None else res
         out["solves"].append({"tol": tol, "status": status, "iterations": its, "solve_seconds": t,
                               "seconds_per_iteration": t / its if its else None, "relative_residual": res,
-                              "dual_relative_residual": rel(r) if rel else res})
+                              "dual_relative_residual": dual, "launches": launches, "host_syncs": syncs,
+                              "launches_per_iteration": launches / its if its else None})
     return out
 
 
@@ -164,7 +175,11 @@ def main(argv=None):
     ap.add_argument("--baseline-max-iterations", type=int, default=20000, help="CG with Jacobi's cap")
     ap.add_argument("--no-baseline", action="store_true", help="skip CG with Jacobi")
     a = ap.parse_args(argv)
-    be = Backend(a.backend)
+    try:
+        be = Backend(a.backend)
+    except RuntimeError as e:  # --backend cupy without CuPy or a device: an error, never a NumPy run
+        print(f"gpu_bench: {e}", file=sys.stderr)
+        return 2
     for p in a.captures:
         if not os.path.exists(p) or not hierarchy_io.forms(p):
             ap.error(f"{p}: no such file, or no exported hierarchy in it (xpbd_bench.export_hierarchy)")

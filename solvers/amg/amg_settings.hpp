@@ -51,6 +51,14 @@ struct AmgOptions {
   // refresh after a setup; between them the V-cycle keeps the last refreshed coarse levels (a
   // lagged but still SPD preconditioner) and level 0's own smoother is refreshed. 1 = always.
   int coarse_refresh_interval = 1;
+  // What a values-only setup between rebuilds does (refresh_rule.hpp): full (every level, as
+  // above) | fine (level 0's smoother; the coarse levels lagged) | keep (nothing), the last two
+  // while a solve needs at most refresh_growth × the PCG iterations per decade of residual of the
+  // first solve after the last full refresh. full under XPBD (its K moves too much between outer
+  // iterations: coarse_refresh_interval = 2 doubled the PCG count); the newton profile's is
+  // measured in docs/amg_scaling.md.
+  std::string refresh = "full";
+  double refresh_growth = 1.5;
   // D of the smoothed P: block | scalar. Block (a scalar layout's blocks are its diagonal): the
   // same or fewer iterations than the scalar D on the captured primal systems (squash 29 against
   // 31), and the block smoother's λ_max(D⁻¹A) serves P too (one Lanczos per level, not two).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <omp.h>
+#include <string>
 
 namespace xb::amg {
 
@@ -170,41 +171,138 @@ inline void block_madd_any(int bi, int bk, int bj, const double* a, int lda, con
     block_madd<0, 0>(bi, bk, bj, a, lda, b, ldb, c, ldc);
 }
 
-// Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes).
+// c_J += a·b_J for the blocks b_J of one row node K of B (blocks t0..t1): a is BI × BK, kept in
+// registers across them; blocks of another width than BJ go through block_madd_any. The sums are
+// block_madd's, in its order.
+template <int BI, int BK, int BJ>
+void row_madd(const double* __restrict a, int lda, const double* b0, int ldb, const BlockPattern& pb, int t0, int t1,
+              const int* pos, double* c0, int ldc) {
+  double ar[BI][BK];
+  for (int r = 0; r < BI; ++r)
+    for (int k = 0; k < BK; ++k) ar[r][k] = a[static_cast<long>(r) * lda + k];
+  for (int t = t0; t < t1; ++t) {
+    const int J = pb.col[t];
+    const double* __restrict b = b0 + pb.offset[t];
+    double* __restrict c = c0 + pos[J];
+    if (pb.cols(J) != BJ) {
+      block_madd_any(BI, BK, pb.cols(J), a, lda, b, ldb, c, ldc);
+      continue;
+    }
+    for (int r = 0; r < BI; ++r) {
+      double* cr = c + static_cast<long>(r) * ldc;
+      double acc[BJ];
+      for (int q = 0; q < BJ; ++q) acc[q] = cr[q];
+      for (int k = 0; k < BK; ++k)
+        for (int q = 0; q < BJ; ++q) acc[q] += ar[r][k] * b[static_cast<long>(k) * ldb + q];
+      for (int q = 0; q < BJ; ++q) cr[q] = acc[q];
+    }
+  }
+}
+
+// Block row I of C = A·B (C's pattern set; pos: per thread, over C's column nodes); upper: only
+// its blocks J ≥ I (B's rows hold sorted column nodes: the loop starts at the first J ≥ I).
 void product_block_row(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
-                       SparseMatrix& C, const BlockPattern& pc, int I, std::vector<int>& pos) {
+                       SparseMatrix& C, const BlockPattern& pc, int I, std::vector<int>& pos, bool upper) {
   const int s = pa.row_start[I], bi = pa.rows(I);
   const int *ao = A.outerIndexPtr(), *bo = B.outerIndexPtr(), *co = C.outerIndexPtr();
   const int lda = ao[s + 1] - ao[s], ldc = co[s + 1] - co[s];
   double* c0 = C.valuePtr() + co[s];
   std::fill(c0, c0 + static_cast<long>(bi) * ldc, 0.0);
   for (int q = pc.ptr[I]; q < pc.ptr[I + 1]; ++q) pos[pc.col[q]] = pc.offset[q];
+  constexpr int kAhead = 2;  // B's rows are gathered by A's column nodes: load them early
   for (int k = pa.ptr[I]; k < pa.ptr[I + 1]; ++k) {
+    if (k + kAhead < pa.ptr[I + 1]) {
+      const int Kn = pa.col[k + kAhead], sn = pb.row_start[Kn];
+      const char* row = reinterpret_cast<const char*>(B.valuePtr() + bo[sn]);
+      const long bytes = 8L * (bo[pb.row_start[Kn + 1]] - bo[sn]);
+      for (long c = 0; c < bytes; c += 64) __builtin_prefetch(row + c);
+      __builtin_prefetch(pb.col.data() + pb.ptr[Kn]);
+      __builtin_prefetch(pb.offset.data() + pb.ptr[Kn]);
+    }
     const int K = pa.col[k], sk = pb.row_start[K], bk = pb.rows(K);
     const double* a = A.valuePtr() + ao[s] + pa.offset[k];
     const int ldb = bo[sk + 1] - bo[sk];
     const double* b0 = B.valuePtr() + bo[sk];
-    for (int t = pb.ptr[K]; t < pb.ptr[K + 1]; ++t) {
-      const int J = pb.col[t], bj = pb.cols(J);
-      const double* b = b0 + pb.offset[t];
-      block_madd_any(bi, bk, bj, a, lda, b, ldb, c0 + pos[J], ldc);
-    }
+    const int t0 = upper ? static_cast<int>(std::lower_bound(pb.col.begin() + pb.ptr[K], pb.col.begin() + pb.ptr[K + 1], I) -
+                                            pb.col.begin())
+                         : pb.ptr[K];
+    const int t1 = pb.ptr[K + 1];
+    // The usual shapes (K's 3×3 times P's 3×6, R's 6×3 times A·P's 3×6, the 6×6 of level 1) with
+    // their sizes known at compile time.
+    if (bi == 3 && bk == 3)
+      row_madd<3, 3, 6>(a, lda, b0, ldb, pb, t0, t1, pos.data(), c0, ldc);
+    else if (bi == 6 && bk == 3)
+      row_madd<6, 3, 6>(a, lda, b0, ldb, pb, t0, t1, pos.data(), c0, ldc);
+    else if (bi == 6 && bk == 6)
+      row_madd<6, 6, 6>(a, lda, b0, ldb, pb, t0, t1, pos.data(), c0, ldc);
+    else
+      for (int t = t0; t < t1; ++t) {
+        const int J = pb.col[t];
+        block_madd_any(bi, bk, pb.cols(J), a, lda, b0 + pb.offset[t], ldb, c0 + pos[J], ldc);
+      }
   }
 }
 }  // namespace
 
 void block_product_values(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
-                          SparseMatrix& C, const BlockPattern& pc) {
+                          SparseMatrix& C, const BlockPattern& pc, const std::vector<int>* mirror) {
   if (A.rows() != C.rows() || B.cols() != C.cols() || pa.col_start != pb.row_start || pc.ptr.size() != pa.ptr.size())
     throw Error("block product: the operands do not fit the cached pattern");
+  if (mirror && (mirror->size() != pc.col.size() || pc.row_start != pc.col_start))
+    throw Error("block product: the mirror map does not fit the product's pattern");
   const int nr = pa.row_nodes(), ncn = static_cast<int>(pc.col_start.size()) - 1;
+  const int* co = C.outerIndexPtr();
+  double* cv = C.valuePtr();
 #pragma omp parallel
   {
     std::vector<int> pos(ncn, 0);
 #pragma omp for schedule(dynamic, 8)
     for (int I = 0; I < nr; ++I)
-      if (pa.rows(I) > 0) product_block_row(A, pa, B, pb, C, pc, I, pos);
+      if (pa.rows(I) > 0) product_block_row(A, pa, B, pb, C, pc, I, pos, mirror != nullptr);
+    if (mirror) {
+      // Block (I, J), J < I, is block (J, I) transposed (the implicit barrier above: row J is
+      // done); a diagonal block's lower triangle is its upper one's.
+#pragma omp for schedule(dynamic, 8)
+      for (int I = 0; I < nr; ++I) {
+        const auto d = std::lower_bound(pc.col.begin() + pc.ptr[I], pc.col.begin() + pc.ptr[I + 1], I);
+        if (d != pc.col.begin() + pc.ptr[I + 1] && *d == I) {
+          const int off = pc.offset[d - pc.col.begin()];
+          for (int r = 1; r < pc.rows(I); ++r)
+            for (int c = 0; c < r; ++c)
+              cv[co[pc.row_start[I] + r] + off + c] = cv[co[pc.row_start[I] + c] + off + r];
+        }
+        for (int q = pc.ptr[I]; q < pc.ptr[I + 1] && pc.col[q] < I; ++q) {
+          const int J = pc.col[q], m = (*mirror)[q];
+          const double* src = cv + co[pc.row_start[J]] + pc.offset[m];
+          const int lds = co[pc.row_start[J] + 1] - co[pc.row_start[J]];
+          for (int r = 0; r < pc.rows(I); ++r) {
+            double* dst = cv + co[pc.row_start[I] + r] + pc.offset[q];
+            for (int c = 0; c < pc.cols(J); ++c) dst[c] = src[static_cast<long>(c) * lds + r];
+          }
+        }
+      }
+    }
   }
+}
+
+std::vector<int> block_mirror_map(const BlockPattern& pc) {
+  if (pc.row_start != pc.col_start) throw Error("block product: a mirror map needs a square node layout");
+  std::vector<int> m(pc.col.size(), -1);
+  const int nr = pc.row_nodes();
+  int bad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (int I = 0; I < nr; ++I)
+    for (int q = pc.ptr[I]; q < pc.ptr[I + 1] && pc.col[q] < I; ++q) {
+      const int J = pc.col[q];
+      const auto first = pc.col.begin() + pc.ptr[J], last = pc.col.begin() + pc.ptr[J + 1];
+      const auto it = std::lower_bound(first, last, I);
+      if (it == last || *it != I)
+        ++bad;
+      else
+        m[q] = static_cast<int>(it - pc.col.begin());
+    }
+  if (bad) throw Error("block product: the pattern is not symmetric (" + std::to_string(bad) + " blocks without a mirror)");
+  return m;
 }
 
 SparseMatrix block_product(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,

@@ -33,9 +33,15 @@ struct BlockPattern {
 // xb::Error if A's column layout is not B's row layout.
 void block_product_pattern(const BlockPattern& pa, const BlockPattern& pb, SparseMatrix& C, BlockPattern& pc);
 
-// C = A·B into the pattern block_product_pattern made (also the values-only refresh).
+// C = A·B into the pattern block_product_pattern made (also the values-only refresh). With mirror
+// (block_mirror_map(pc)), C is known to be symmetric (Pᵀ·(A P) of a symmetric A): only its blocks
+// on and above the diagonal are computed, those below copied from them transposed — half the
+// work of the product, and a C that is exactly symmetric.
 void block_product_values(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,
-                          SparseMatrix& C, const BlockPattern& pc);
+                          SparseMatrix& C, const BlockPattern& pc, const std::vector<int>* mirror = nullptr);
+// Per block (I, J) of a square block pattern with J < I: the index of block (J, I) (−1 for J ≥ I).
+// Throws xb::Error if the layout is not square or some block has no mirror (not symmetric).
+std::vector<int> block_mirror_map(const BlockPattern& pc);
 
 // C = A·B, pattern and values.
 SparseMatrix block_product(const SparseMatrix& A, const BlockPattern& pa, const SparseMatrix& B, const BlockPattern& pb,

@@ -107,13 +107,16 @@ void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const 
 }
 
 void GalerkinProduct::build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac,
-                            BlockPattern pr, BlockPattern pa, BlockPattern pp) {
+                            BlockPattern pr, BlockPattern pa, BlockPattern pp, bool symmetric) {
   by_blocks_ = true;
   r_ = std::move(pr);
   a_ = std::move(pa);
   p_ = std::move(pp);
   take(AP_, block_product(A, a_, P, p_, ap_));
-  take(Ac, block_product(R, r_, AP_, ap_, ac_));
+  block_product_pattern(r_, ap_, Ac, ac_);
+  mirror_.clear();
+  if (symmetric) mirror_ = block_mirror_map(ac_);
+  block_product_values(R, r_, AP_, ap_, Ac, ac_, symmetric ? &mirror_ : nullptr);
 }
 
 void GalerkinProduct::refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac) {
@@ -124,7 +127,7 @@ void GalerkinProduct::refresh(const SparseMatrix& R, const SparseMatrix& A, cons
     return;
   }
   block_product_values(A, a_, P, p_, AP_, ap_);
-  block_product_values(R, r_, AP_, ap_, Ac, ac_);
+  block_product_values(R, r_, AP_, ap_, Ac, ac_, mirror_.empty() ? nullptr : &mirror_);
 }
 
 namespace {

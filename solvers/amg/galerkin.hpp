@@ -36,8 +36,10 @@ class GalerkinProduct {
              const NodeLayout& fine = {}, const NodeLayout& coarse = {});
   // The same by node blocks, with the block patterns of R, A and P already built (the V-cycle's
   // BlockOperators hold them); kept for refresh().
+  // symmetric: A is symmetric and R = Pᵀ, so A_c is computed on and above its block diagonal
+  // and mirrored (block_product_values; the hierarchy's case).
   void build(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac, BlockPattern pr,
-             BlockPattern pa, BlockPattern pp);
+             BlockPattern pa, BlockPattern pp, bool symmetric = false);
   void refresh(const SparseMatrix& R, const SparseMatrix& A, const SparseMatrix& P, SparseMatrix& Ac);
   bool by_blocks() const { return by_blocks_; }
 
@@ -45,6 +47,7 @@ class GalerkinProduct {
   SparseMatrix AP_;
   bool by_blocks_ = false;
   BlockPattern r_, a_, p_, ap_, ac_;  // the block patterns of R, A, P, A·P and A_c
+  std::vector<int> mirror_;           // symmetric: A_c's block mirror map (empty: the full product)
 };
 
 class AggregateGalerkin {

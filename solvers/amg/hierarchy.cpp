@@ -131,7 +131,8 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   if (L.one_candidate)
     L.galerkin.build(Al, T.P, T.R, next.A_own);
   else if (L.A_blocks && !L.P_blocks.empty() && !L.R_blocks.empty())
-    L.product.build(T.R, Al, T.P, next.A_own, L.R_blocks.pattern, L.A_blocks->pattern, L.P_blocks.pattern);
+    L.product.build(T.R, Al, T.P, next.A_own, L.R_blocks.pattern, L.A_blocks->pattern, L.P_blocks.pattern,
+                    /*symmetric=*/true);  // A_l is SPD and R = Pᵀ
   else
     L.product.build(T.R, Al, T.P, next.A_own, L.nodes, NodeLayout{T.col_start});
   B = T.B_coarse;
@@ -140,20 +141,32 @@ bool Hierarchy::coarsen(Eigen::MatrixXd& B) {
   return true;
 }
 
-bool Hierarchy::refresh(const SparseMatrix& A) {
+bool Hierarchy::refresh_level0(const SparseMatrix& A) {
   if (levels_.empty()) throw Error("mgpbd: refresh before setup");
   if (A.rows() != levels_[0].A->rows() || A.nonZeros() != fine_nnz_)
     throw Error("mgpbd: refresh with a different sparsity pattern (a full setup is needed)");
   if (filtered() && !filter_.refresh(A)) return false;
   levels_[0].A = filtered() ? &filter_.matrix() : &A;
-  // amg.coarse_refresh_interval: the coarse levels only on every k-th refresh (lagged), level
-  // 0's smoother always.
-  const bool coarse = ++refreshes_ % opt_.coarse_refresh_interval == 0;
-  if (!coarse) {
-    levels_[0].smoother->refresh(*levels_[0].A);
-    finish_levels(1);
+  return true;
+}
+
+bool Hierarchy::refresh_fine(const SparseMatrix& A) {
+  if (!refresh_level0(A)) return false;
+  if (levels_.size() == 1) {  // no coarse level to lag: the coarsest is level 0
+    if (levels_[0].smoother) levels_[0].smoother->refresh(*levels_[0].A);
+    finish_levels();
     return true;
   }
+  levels_[0].smoother->refresh(*levels_[0].A);
+  finish_levels(1);
+  return true;
+}
+
+bool Hierarchy::refresh(const SparseMatrix& A) {
+  // amg.coarse_refresh_interval: the coarse levels only on every k-th refresh (lagged), level
+  // 0's smoother always.
+  if (levels_.size() > 1 && ++refreshes_ % opt_.coarse_refresh_interval != 0) return refresh_fine(A);
+  if (!refresh_level0(A)) return false;
   for (size_t l = 0; l + 1 < levels_.size(); ++l) {
     Level& L = levels_[l];
     Level& next = levels_[l + 1];

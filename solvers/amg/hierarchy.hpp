@@ -75,10 +75,17 @@ class Hierarchy {
   // Returns false, with only level 0 refreshed, when level 0 dropped blocks (amg.drop_tolerance)
   // that A's values no longer make negligible: the hierarchy is stale and a full setup is due.
   bool refresh(const SparseMatrix& A);
+  // The same for level 0's smoother (and its float copy) alone: the coarse levels are kept as
+  // the last refresh left them (a lagged coarse correction, still SPD; amg.refresh = fine).
+  bool refresh_fine(const SparseMatrix& A);
   // One V-cycle from x = 0 (Algorithm 2): x ≈ A⁻¹ b. The operator b ↦ x is symmetric positive
   // definite for every smoother, so it can precondition CG. Defined in vcycle.cpp.
   void vcycle(const Vector& b, Vector& x);
 
+  // Whether the V-cycle reads level 0 from its own storage (the float copy of precision =
+  // single, or A_F of drop_tolerance), not the caller's matrix: then values changed in the
+  // caller's matrix leave the preconditioner as it was (amg.refresh = keep).
+  bool owns_level0() const { return !levels_.empty() && (opt_.precision == "single" || filtered()); }
   bool empty() const { return levels_.empty(); }
   void clear() { levels_.clear(); }
   int num_levels() const { return static_cast<int>(levels_.size()); }
@@ -118,6 +125,8 @@ class Hierarchy {
   std::vector<Level> levels_;
   ZeroBlockFilter filter_;  // level 0's A_F, when blocks were dropped
   bool filtered() const { return filter_.dropped_blocks() > 0; }
+  // refresh()'s checks and level 0's matrix (A, or A_F refreshed); false: A_F is stale.
+  bool refresh_level0(const SparseMatrix& A);
   long fine_nnz_ = 0;       // the caller's A
   long refreshes_ = 0;      // values-only refreshes since the last build (coarse_refresh_interval)
   // Coarsest level: dense Cholesky while small (the usual case, ≤ max_coarse rows), sparse LDLᵀ

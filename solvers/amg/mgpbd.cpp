@@ -4,10 +4,13 @@
 //    the first setup of a frame amg.setup_interval frames after the last one;
 //  - otherwise a values-only refresh (A_l through the cached Galerkin pattern, diagonals,
 //    smoother spectral bounds, the coarse factorisation).
+// Between rebuilds, amg.refresh chooses how much of the hierarchy a values-only setup refreshes
+// (refresh_rule.hpp): every level (full, the default), level 0's smoother (fine), or nothing (keep).
 // On the dual system (block size 1) it is the paper's unsmoothed aggregation with B = 1; on the
 // primal form's K (block size 3, rigid-body modes given) it defaults to nodal smoothed
 // aggregation with the 6 rigid modes (amg.near_kernel = auto, amg.prolongator = auto).
 #include "hierarchy.hpp"
+#include "refresh_rule.hpp"
 #include "../factories.hpp"
 #include "../krylov/pcg.hpp"
 #include "../setup_policy.hpp"
@@ -26,7 +29,8 @@ class MgpbdSolver final : public LinearSolver {
         opt_(p.amg),
         maxit_(p.linear.max_iterations),
         natural_(p.linear.stop_norm == "energy"),
-        policy_(p.amg.setup_interval) {
+        policy_(p.amg.setup_interval),
+        rule_(p.amg.refresh, p.amg.refresh_growth) {
     opt_.near_kernel.seed = opt_.smoother.seed = static_cast<unsigned>(p.seed);
     check_settings(amg_settings(), opt_, "mgpbd");  // options set in code: fail now, not inside a run
   }
@@ -44,14 +48,25 @@ class MgpbdSolver final : public LinearSolver {
     // hierarchy's levels; the options it reads are the same.)
     h_.configure(opt_, {ctx.block_size, ctx.near_kernel});
     try {
-      // A hierarchy built on couplings that were zero and are not any more is rebuilt too.
-      if (!full && h_.refresh(A)) {
+      // A hierarchy built on couplings that were zero and are not any more is rebuilt too. keep
+      // needs a V-cycle that reads its own copy of level 0 (the float one, or A_F): over the
+      // caller's new K an old smoother would not be the old, SPD, operator; fine is used there.
+      using amg::RefreshScope;
+      RefreshScope scope = full ? RefreshScope::full : rule_.next();
+      if (scope == RefreshScope::keep && !h_.owns_level0()) scope = RefreshScope::fine;
+      if (scope == RefreshScope::keep) {
+        action_ = "reuse";
+      } else if (scope == RefreshScope::fine && h_.refresh_fine(A)) {
+        action_ = "refresh_fine";
+      } else if (!full && h_.refresh(A)) {
         action_ = "refresh";
+        rule_.refreshed();
       } else {
         h_.build(A);
         nnz0_ = A.nonZeros();
         block_size_ = ctx.block_size;
         policy_.rebuilt(ctx);
+        rule_.refreshed();
         action_ = "setup";
       }
     } catch (const Error& e) {
@@ -63,6 +78,8 @@ class MgpbdSolver final : public LinearSolver {
     if (action_ == "setup") {
       setup_time_total_ += setup_time_;
       ++setup_count_;
+    } else if (action_ == "reuse") {
+      ++reuse_count_;
     } else {
       refresh_time_total_ += setup_time_;
       ++refresh_count_;
@@ -80,6 +97,7 @@ class MgpbdSolver final : public LinearSolver {
     }
     Preconditioner M = [this](const Vector& r, Vector& z) { h_.vcycle(r, z); };
     st = pcg(*A_, b, x, M, tolerance(), maxit_, rel_, natural_);
+    rule_.solved(st.iterations, st.final_relative_residual, st.status != LinearStatus::breakdown);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
@@ -100,6 +118,7 @@ class MgpbdSolver final : public LinearSolver {
     s["refresh_time_total"] = refresh_time_total_;
     s["setup_count"] = setup_count_;
     s["refresh_count"] = refresh_count_;
+    s["reuse_count"] = reuse_count_;
     return s;
   }
 
@@ -114,6 +133,7 @@ class MgpbdSolver final : public LinearSolver {
   int maxit_;
   bool natural_;
   SetupPolicy policy_;
+  amg::RefreshRule rule_;
   RelativeResidual rel_;
   amg::Hierarchy h_;
   const SparseMatrix* A_ = nullptr;
@@ -121,7 +141,7 @@ class MgpbdSolver final : public LinearSolver {
   int block_size_ = 1;
   std::string action_, failure_;
   double setup_time_ = 0, setup_time_total_ = 0, refresh_time_total_ = 0;
-  int setup_count_ = 0, refresh_count_ = 0;
+  int setup_count_ = 0, refresh_count_ = 0, reuse_count_ = 0;
 };
 }  // namespace
 

@@ -187,8 +187,8 @@ TEST(Cli, ReportFlagsRunsTimedUnderLoad) {
   };
   const std::string out = tmpfile("loaded.h5");
   xb::append_runs(out,
-                  {run("0001_loaded", 3.75, "passive"), run("0002_quiet", 0.4, "passive"), run("0003_old", -1, ""),
-                   run("0004_spinning", 0.2, "active"), run("0005_edge", 3.5, "passive")},
+                  {run("loaded", 3.75, "passive"), run("quiet", 0.4, "passive"), run("old", -1, ""),
+                   run("spinning", 0.2, "active"), run("edge", 3.5, "passive")},
                   true);
   const Result t = sh("report " + out);
   ASSERT_EQ(t.code, 0) << t.err;
@@ -219,7 +219,7 @@ TEST(Cli, ReportFlagsRunsTimedUnderLoad) {
 
   // A file with only unflagged runs: the table is as before, no column, no legend.
   const std::string quiet = tmpfile("quiet.h5");
-  xb::append_runs(quiet, {run("0001_quiet", 0.4, "passive"), run("0002_old", -1, "")}, true);
+  xb::append_runs(quiet, {run("quiet", 0.4, "passive"), run("old", -1, "")}, true);
   const Result q = sh("report " + quiet);
   ASSERT_EQ(q.code, 0) << q.err;
   EXPECT_EQ(q.out.find("timing"), std::string::npos) << q.out;

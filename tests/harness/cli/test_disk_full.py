@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """A full disk through the CLI (issue 33; docs/failures.md): run, solve, sweep and capture each
-meet a write that fails at the first, a middle and the last write call of a results file, at its
-flush and at its rename (the fault hook XB_FAULT_WRITE / XB_FAULT_RENAME of
-harness/io/io_fault.hpp). Every case must end with exit code 2, one line naming the file and the
-cause in words, the earlier file byte-for-byte as it was, no .tmp left and no signal; a sweep or a
-run of several solvers keeps the runs it finished. Then the same commands on a real 300 KB tmpfs,
-when this machine lets us mount one (root); skipped with a message where not.
+meet a write that fails at the first write call of an append, in the middle of the run's file, at
+the index's last write and flush, and at the rename of either (an append writes the run's file in
+FILE.runs/ and then the index FILE: harness/io/recorder.hpp; the fault hook XB_FAULT_WRITE /
+XB_FAULT_RENAME of harness/io/io_fault.hpp). Every case must end with exit code 2, one line naming
+the file and the cause in words, the earlier file (index and run files) byte-for-byte as it was,
+no .tmp left and no signal; a sweep or a run of several solvers keeps the runs it finished. Then
+the same commands on a real 300 KB tmpfs, when this machine lets us mount one (root); skipped
+with a message where not.
 
     python3 tests/harness/cli/test_disk_full.py --binary build/xpbd-bench
 """
@@ -30,6 +32,34 @@ def read(path):
         return f.read()
 
 
+def snapshot(path):
+    """A results file as the user sees it: the index and every file of its runs folder (not the
+    lock), by name; None when absent."""
+    if not os.path.exists(path):
+        return None
+    files = {"index": read(path)}
+    folder = path + ".runs"
+    if os.path.isdir(folder):
+        files.update({f: read(os.path.join(folder, f)) for f in os.listdir(folder) if f != "lock"})
+    return files
+
+
+def copy_results(src, folder):
+    """The index and its runs folder into `folder`, under the same name (the links name it)."""
+    dst = os.path.join(folder, os.path.basename(src))
+    shutil.copy(src, dst)
+    if os.path.isdir(src + ".runs"):
+        shutil.copytree(src + ".runs", dst + ".runs")
+    return dst
+
+
+def new_run_file(before, after):
+    """The size of the run file an append added (in `after`'s snapshot, not in `before`'s)."""
+    added = [k for k in after if k != "index" and k not in (before or {})]
+    assert len(added) == 1, f"expected one new run file, got {added}"
+    return len(after[added[0]])
+
+
 def xb(binary, args, env=None, cwd=None):
     e = dict(os.environ, OMP_NUM_THREADS="1")
     e.update(env or {})
@@ -42,8 +72,8 @@ def fail(case, why):
 
 
 def check_failed(case, rc, err, target, before, words, kept=None, named=None):
-    """Exit 2, one error line naming the file (`named`, else target) and words, target unchanged,
-    no .tmp beside it. Returns the error line."""
+    """Exit 2, one error line naming the file (`named`, else target) and words, target (a snapshot,
+    or the bytes of a capture's file) unchanged, no .tmp beside it. Returns the error line."""
     lines = [ln for ln in err.splitlines() if ln.startswith("xpbd-bench:")]
     named = named or target
     if rc != 2:
@@ -56,7 +86,8 @@ def check_failed(case, rc, err, target, before, words, kept=None, named=None):
         fail(case, f"the error does not say '{words}': {lines[0]}")
     elif kept is not None and kept not in lines[0]:
         fail(case, f"the error does not say '{kept}': {lines[0]}")
-    if os.path.exists(target) and read(target) != before:
+    now = read(target) if isinstance(before, bytes) else snapshot(target)
+    if os.path.exists(target) and now != before:
         fail(case, f"{target} changed")
     folder = os.path.dirname(target)
     left = [f for _, _, files in os.walk(folder) for f in files if f.endswith(".tmp")]
@@ -65,21 +96,25 @@ def check_failed(case, rc, err, target, before, words, kept=None, named=None):
     return lines[0] if lines else ""
 
 
-def faults(size, rename_at=1):
-    """(name, environment) for the first, a middle and the last write, the flush and the rename."""
-    n = calls(size)
-    assert n >= 4, f"a file of {size} bytes is too small to have a middle write"
+def faults(run_size, index_size):
+    """(name, environment) for an append of a run file of run_size bytes and an index of
+    index_size: the first write, the middle of the run file, the index's last write and its flush,
+    the run file's rename and the index's."""
+    r, n = calls(run_size), calls(run_size) + calls(index_size)
+    assert r >= 4, f"a run file of {run_size} bytes is too small to have a middle write"
     return [("first write", {"XB_FAULT_WRITE": "1:ENOSPC"}, "no space left on device"),
-            ("middle write", {"XB_FAULT_WRITE": f"{n // 2}:EFBIG"}, "file too large"),
+            ("middle write", {"XB_FAULT_WRITE": f"{r // 2}:EFBIG"}, "file too large"),
             ("last write", {"XB_FAULT_WRITE": f"{n - 1}:ENOSPC"}, "no space left on device"),
             ("flush", {"XB_FAULT_WRITE": f"{n}:ENOSPC"}, "no space left on device"),
-            ("rename", {"XB_FAULT_RENAME": f"{rename_at}:EROFS"}, "read-only file system")]
+            ("rename of the run file", {"XB_FAULT_RENAME": "1:EROFS"}, "read-only file system"),
+            ("rename of the index", {"XB_FAULT_RENAME": "2:EROFS"}, "read-only file system")]
 
 
 def command_cases(binary, work):
     """Each command against each fault: a list of (case, thunk) run in parallel."""
     run = ["run", "--scene", "cloth_hang", "--set", "resolution=8", "--frames", "2", "--solver", "mgpbd"]
-    earlier = os.path.join(work, "earlier.h5")
+    os.makedirs(os.path.join(work, "earlier"))
+    earlier = os.path.join(work, "earlier", "F.h5")
     assert xb(binary, ["run", "--scene", "cloth_hang", "--set", "resolution=8", "--frames", "1", "--solver", "cholmod",
                        "--out", earlier])[0] == 0
     system = os.path.join(work, "sys")
@@ -93,13 +128,13 @@ def command_cases(binary, work):
     sweep = ["sweep", spec]
     cases = []
     for name, args in (("run", run), ("solve", solve), ("sweep", sweep)):
-        probe = os.path.join(work, f"probe_{name}.h5")
-        shutil.copy(earlier, probe)  # a sweep appends to it; run and solve replace it
-        # The file as the first write makes it: for the sweep, stop before its second write.
-        rc, err = xb(binary, args + ["--out", probe], {"XB_FAULT_RENAME": "2:EIO"} if name == "sweep" else None)
+        probe = copy_results(earlier, tempfile.mkdtemp(dir=work))  # a sweep appends to it; run and solve replace it
+        # The files the first append makes: for the sweep, stop before its second append.
+        rc, err = xb(binary, args + ["--out", probe], {"XB_FAULT_RENAME": "3:EIO"} if name == "sweep" else None)
         if rc != (2 if name == "sweep" else 0):
             fail(f"{name} probe", f"exit {rc} (is XB_FAULT_RENAME honoured?): {err}")
-        for fault, env, words in faults(os.path.getsize(probe)):
+        after = snapshot(probe)
+        for fault, env, words in faults(new_run_file(snapshot(earlier), after), len(after["index"])):
             case = f"{name} at the {fault}"
             cases.append((case, lambda c=case, a=args, e=env, w=words: one_case(binary, work, c, a, earlier, e, w)))
     # Runs finished before the failed write stay: a run of two solvers, a sweep of three runs.
@@ -121,28 +156,25 @@ def side_file_case(binary, work, run, flag, named):
     side = os.path.join(folder, "meshes" if flag == "--write-meshes" else "state.h5")
     extra = [flag, side] + (["--frame-of-state", "0"] if flag == "--save-state" else [])
     rc, err = xb(binary, run + extra + ["--out", out], {"XB_FAULT_WRITE": "1:ENOSPC"})
-    check_failed(f"run {flag}", rc, err, out, b"", "no space left on device", named=named)
+    check_failed(f"run {flag}", rc, err, out, None, "no space left on device", named=named)
     if os.path.exists(out):
         fail(f"run {flag}", "the run was recorded after its mesh or state failed")
 
 
 def one_case(binary, work, case, args, earlier, env, words):
-    folder = tempfile.mkdtemp(dir=work)
-    out = os.path.join(folder, "F.h5")
-    shutil.copy(earlier, out)
+    out = copy_results(earlier, tempfile.mkdtemp(dir=work))
     rc, err = xb(binary, args + ["--out", out], env)
-    check_failed(case, rc, err, out, read(earlier), words)
+    check_failed(case, rc, err, out, snapshot(earlier), words)
 
 
 def kept_case(binary, work, args, earlier, kept):
-    folder = tempfile.mkdtemp(dir=work)
-    out = os.path.join(folder, "F.h5")
-    shutil.copy(earlier, out)
-    rc, err = xb(binary, args + ["--out", out], {"XB_FAULT_RENAME": "2:ENOSPC"})
+    out = copy_results(earlier, tempfile.mkdtemp(dir=work))
+    # The second append's first rename (its run file's; each append renames two files).
+    rc, err = xb(binary, args + ["--out", out], {"XB_FAULT_RENAME": "3:ENOSPC"})
     case = " ".join(args[:1]) + " keeps its finished runs"
     # The file is not the earlier one any more: it holds the first run(s); it is what the failed
     # write found, so check it is readable and holds them.
-    check_failed(case, rc, err, out, read(out), "no space left on device", kept)
+    check_failed(case, rc, err, out, snapshot(out), "no space left on device", kept)
     if subprocess.run([binary, "report", out], capture_output=True).returncode != 0:
         fail(case, "the kept runs cannot be reported")
     if args[0] == "sweep":  # and resumes
@@ -205,13 +237,16 @@ def real_full_disk(binary, work):
         }
         for name, args in commands.items():
             for f in os.listdir(mnt):
-                os.remove(os.path.join(mnt, f))
+                shutil.rmtree(os.path.join(mnt, f)) if os.path.isdir(os.path.join(mnt, f)) else os.remove(os.path.join(mnt, f))
             out = os.path.join(mnt, "F.h5")
             assert xb(binary, ["run", "--scene", "cloth_hang", "--set", "resolution=8", "--frames", "1", "--solver",
                                "cholmod", "--out", out])[0] == 0
+            # Leave room for about one run (an append writes the run's file and the index, ~45 KB
+            # here), so that the first write fits or not and a later one surely does not.
+            st = os.statvfs(mnt)
             with open(os.path.join(mnt, "filler"), "wb") as f:
-                f.write(b"\0" * (100_000 if name == "sweep" else 150_000))
-            before = read(out)
+                f.write(b"\0" * max(0, st.f_bavail * st.f_frsize - {"sweep": 70_000, "solve": 50_000}.get(name, 40_000)))
+            before = snapshot(out)
             target = os.path.join(mnt, "P") if name == "capture" else out
             rc, err = xb(binary, args + ["--out", target])
             case = f"real full disk: {name}"
@@ -219,11 +254,11 @@ def real_full_disk(binary, work):
             print(f"{case}: exit {rc}: {lines[0] if lines else err.strip()[-200:]}")
             if rc != 2 or len(lines) != 1 or "no space left on device" not in lines[0]:
                 fail(case, f"exit {rc}, expected 2 and one line saying 'no space left on device'; stderr:\n{err}")
-            if lines and "finished before" not in lines[0] and read(out) != before:
+            if lines and "finished before" not in lines[0] and snapshot(out) != before:
                 fail(case, "the earlier F.h5 changed")
             if subprocess.run([binary, "report", out], capture_output=True).returncode != 0:
                 fail(case, "F.h5 cannot be reported")
-            if [f for f in os.listdir(mnt) if f.endswith(".tmp")]:
+            if [f for _, _, files in os.walk(mnt) for f in files if f.endswith(".tmp")]:
                 fail(case, ".tmp left behind")
     finally:
         subprocess.run(["umount", mnt], check=False)

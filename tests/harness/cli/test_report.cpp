@@ -95,14 +95,14 @@ TEST(Report, UnconvergedReferenceAndOldNewtonFiles) {
     r.attrs["final_dual_residual"] = 1e-9;
     return r;
   };
-  RunRecord unconverged = run("0001_unconverged");
+  RunRecord unconverged = run("unconverged");  // numbered by the recorder: 0001_unconverged
   unconverged.attrs["convergence_measure"] = std::string("energy_gradient");
   unconverged.attrs["final_convergence"] = 2.0;
   unconverged.attrs["final_relative_convergence"] = 7.9e-8;
   unconverged.attrs["reference_substeps_unconverged"] = 2LL;
   unconverged.attrs["substeps_total"] = 3LL;
   unconverged.attrs["final_position_error"] = 0.5;
-  RunRecord old = run("0002_old");
+  RunRecord old = run("old");
   old.attrs["step"] = std::string("newton");
   old.attrs["final_relative_newton_residual"] = 3e-9;
   const std::string out = dir / "made.h5";

@@ -1,7 +1,7 @@
 // A failed write of an output (a full disk), in process: the fault hook (io_fault.hpp) fails the
 // first, a middle and the last write call of a file, its flush and its rename; each must end in
 // one WriteError naming the file and the cause in words, with the earlier file byte-for-byte as it
-// was, no PATH.tmp left and no HDF5 object left open (the crash of issue 33 was a file left
+// was, no temporary file left and no HDF5 object left open (the crash of issue 33 was a file left
 // half-closed inside libhdf5).
 #include "harness/io/atomic_file.hpp"
 #include "harness/io/io_fault.hpp"
@@ -16,6 +16,7 @@
 #include <cerrno>
 #include <fstream>
 #include <iterator>
+#include <map>
 
 namespace fs = std::filesystem;
 using namespace xb;
@@ -69,7 +70,8 @@ void expect_failed_write(Write write, const std::string& target, const std::stri
     }
   }
   EXPECT_TRUE(bytes_of(target) == before) << target << " changed";
-  EXPECT_FALSE(fs::exists(target + ".tmp"));
+  const fs::path dir = fs::path(target).parent_path();
+  for (const auto& e : fs::recursive_directory_iterator(dir)) EXPECT_NE(e.path().extension(), ".tmp") << e.path();
   EXPECT_EQ(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL), 0) << "HDF5 objects left open";
 }
 
@@ -130,26 +132,51 @@ TEST(AtomicFile, TextWritersStopAtTheFirstFailedWrite) {
   expect_failed_write(write, target, before, "rename", "read-only file system");
 }
 
+namespace {
+// A results file as the user sees it: the index and every file in its runs folder (by name).
+std::map<std::string, std::string> results_bytes(const std::string& path) {
+  std::map<std::string, std::string> files{{"index", bytes_of(path)}};
+  for (const auto& e : fs::directory_iterator(runs_folder(path)))
+    if (e.path().filename() != "lock") files[e.path().filename().string()] = bytes_of(e.path().string());
+  return files;
+}
+}  // namespace
+
+// An append writes the run's file (chunks, flush, rename 1) and then the new index (chunks, flush,
+// rename 2): a fault at any of them leaves the index and the runs folder as they were.
 TEST(AtomicFile, ResultsFileFailsAtFirstMiddleLastWriteFlushAndRename) {
   TempDir d;
   const std::string out = d / "r.h5";
-  append_runs(out, {run_named("0001_earlier", 10)}, true);
-  const std::string before = bytes_of(out);
-  // What the append writes: the probe is the same append to a copy.
-  fs::copy_file(out, d / "probe.h5");
-  const RunRecord added = run_named("0002_added", 8000);  // 64 KB of doubles: several chunks
-  append_runs(d / "probe.h5", {added});
-  const long calls = calls_for(fs::file_size(d / "probe.h5"));
-  ASSERT_GE(calls, 5);
+  append_runs(out, {run_named("earlier", 10)}, true);
+  const auto before = results_bytes(out);
+  // What the append writes: the probe is the same append to another file of one run.
+  const std::string probe = d / "probe.h5";
+  append_runs(probe, {run_named("earlier", 10)}, true);
+  const RunRecord added = run_named("added", 8000);  // 64 KB of doubles: several chunks
+  append_runs(probe, {added});
+  long run_calls = 0;
+  for (const auto& e : fs::directory_iterator(runs_folder(probe)))
+    if (e.path().filename().string().starts_with("0002_added.")) run_calls = calls_for(fs::file_size(e.path()));
+  const long index_calls = calls_for(fs::file_size(probe));
+  ASSERT_GE(run_calls, 5);
   auto append = [&] { append_runs(out, {added}); };
-  for (long k : {1L, calls / 2, calls - 1, calls}) expect_failed_write(append, out, before, std::to_string(k) + ":ENOSPC", "no space left on device");
-  expect_failed_write(append, out, before, "rename", "read-only file system");
+  for (long k : {1L, run_calls / 2, run_calls - 1, run_calls, run_calls + 1, run_calls + index_calls - 1, run_calls + index_calls}) {
+    expect_failed_write(append, out, before.at("index"), std::to_string(k) + ":ENOSPC", "no space left on device");
+    EXPECT_TRUE(results_bytes(out) == before) << "fault at write " << k << ": the runs folder changed";
+  }
+  expect_failed_write(append, out, before.at("index"), "rename", "read-only file system");  // the run file's
+  {
+    Faults f("", "2:EIO");  // the index's
+    EXPECT_THROW(append(), WriteError);
+  }
+  EXPECT_TRUE(results_bytes(out) == before) << "a failed rename of the index left a run file";
   // A fresh file fails the same way, and the earlier one stays.
   auto fresh = [&] { append_runs(out, {added}, true); };
-  expect_failed_write(fresh, out, before, "1:EDQUOT", "quota exceeded");
+  expect_failed_write(fresh, out, before.at("index"), "1:EDQUOT", "quota exceeded");
+  EXPECT_TRUE(results_bytes(out) == before);
   append_runs(out, {added});  // and with no fault the append works after all of them
   EXPECT_EQ(count_runs(out), 2);
-  EXPECT_EQ(fs::file_size(out), fs::file_size(d / "probe.h5"));
+  EXPECT_EQ(fs::file_size(out), fs::file_size(probe));
 }
 
 TEST(AtomicFile, CaptureReplacesNoFileWhenAWriteFails) {

@@ -14,7 +14,7 @@ using namespace xb;
 namespace {
 RunRecord simulation_run() {
   RunRecord r;
-  r.name = "0001_cloth_hang_cg";
+  r.name = "cloth_hang_cg";
   r.attrs["level"] = std::string("simulation");
   r.attrs["status"] = std::string("ok");
   r.attrs["outer_iterations"] = 3LL;
@@ -27,6 +27,7 @@ RunRecord simulation_run() {
 TEST(Recorder, WritesOnlyWhatTheSchemaLists) {
   const std::string out = (fs::temp_directory_path() / "xb_recorder_schema.h5").string();
   fs::remove(out);
+  fs::remove_all(runs_folder(out));
   EXPECT_NO_THROW(append_runs(out, {simulation_run()}, true));
   EXPECT_EQ(count_runs(out), 1);
   const auto size = fs::file_size(out);
@@ -46,4 +47,5 @@ TEST(Recorder, WritesOnlyWhatTheSchemaLists) {
   EXPECT_EQ(count_runs(out), 1);  // the file is as it was
   EXPECT_EQ(fs::file_size(out), size);
   fs::remove(out);
+  fs::remove_all(runs_folder(out));
 }

@@ -9,6 +9,9 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -228,6 +231,25 @@ TEST(RealMeshes, NamedMeshSyntax) {
   EXPECT_FALSE(is_named_mesh("meshes/bunny.msh"));
   EXPECT_THROW(named_mesh_path("dragon:12k"), Error);
   EXPECT_THROW(named_mesh_path("bunny:13k"), Error);
+  // Every name and size scripts/get_meshes.sh makes is accepted (bunny:850k was refused, issue
+  // 39): a cached pair is returned as it is, without running the script.
+  const fs::path dir = fs::temp_directory_path() / ("xb_named_meshes_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const char* old_dir = std::getenv("XB_MESH_DIR");
+  const std::string saved = old_dir ? old_dir : "";
+  setenv("XB_MESH_DIR", dir.c_str(), 1);
+  for (const char* base : {"bunny_850k", "elephant_270k", "armadillo_5k"}) {
+    std::ofstream(dir / (std::string(base) + ".node")) << "0 3 0 0\n";
+    std::ofstream(dir / (std::string(base) + ".ele")) << "0 4 0\n";
+  }
+  EXPECT_EQ(named_mesh_path("bunny:850k"), (dir / "bunny_850k.ele").string());
+  EXPECT_EQ(named_mesh_path("elephant:270k"), (dir / "elephant_270k.ele").string());
+  EXPECT_EQ(named_mesh_path("armadillo:5k"), (dir / "armadillo_5k.ele").string());
+  if (old_dir)
+    setenv("XB_MESH_DIR", saved.c_str(), 1);
+  else
+    unsetenv("XB_MESH_DIR");
+  fs::remove_all(dir);
   SceneSettings p;
   EXPECT_THROW(load_tet_mesh("no_such_generator", p, "bar"), Error);
   EXPECT_THROW(load_tet_mesh("/no/such/file.msh", p, "bar"), Error);

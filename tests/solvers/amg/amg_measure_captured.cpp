@@ -84,6 +84,11 @@ void measure(const SparseMatrix& K, const Vector& f, const Eigen::MatrixXd& rigi
   const int reps = 3;
   const double setup = least(1, [&] { h.setup(K, o, {3, &rigid}); });
   const double refresh = least(reps, [&] { h.refresh(K); });
+  // amg.refresh = fine: level 0's smoother (D, Lanczos) and its float copy; the smoother alone.
+  const double fine = least(reps, [&] { h.refresh_fine(K); });
+  const double smoother0 = least(reps, [&] { h.level(0).smoother->refresh(h.matrix(0)); });
+  std::printf("[%s] refresh_fine %.4f s: level 0's smoother %.4f, the float copy and the rest %.4f\n", spec.c_str(),
+              fine, smoother0, fine - smoother0);
   Vector x, z;
   const Vector r0 = f;
   const double vcycle = least(reps, [&] { h.vcycle(r0, z); });
@@ -94,14 +99,31 @@ void measure(const SparseMatrix& K, const Vector& f, const Eigen::MatrixXd& rigi
   for (int l = 0; l < h.num_levels(); ++l) {
     const amg::Level& L = h.level(l);
     const SparseMatrix& A = h.matrix(l);
-    double galerkin = 0, smooth = 0;
+    double galerkin = 0, galerkin_full = 0, smooth = 0;
     if (l + 1 < h.num_levels()) {
-      amg::GalerkinProduct g;  // the level's product again, timed alone
+      // The level's product again, timed alone: as the hierarchy runs it (block levels: the
+      // symmetric product, blocks on and above the diagonal) and the full block product.
+      amg::GalerkinProduct g, full;
       SparseMatrix Ac;
-      if (L.A_blocks && !L.P_blocks.empty() && !L.R_blocks.empty())
-        g.build(L.T.R, A, L.T.P, Ac, L.R_blocks.pattern, L.A_blocks->pattern, L.P_blocks.pattern);
-      else
+      if (L.A_blocks && !L.P_blocks.empty() && !L.R_blocks.empty()) {
+        g.build(L.T.R, A, L.T.P, Ac, L.R_blocks.pattern, L.A_blocks->pattern, L.P_blocks.pattern, true);
+        full.build(L.T.R, A, L.T.P, Ac, L.R_blocks.pattern, L.A_blocks->pattern, L.P_blocks.pattern, false);
+        galerkin_full = least(reps, [&] { full.refresh(L.T.R, A, L.T.P, Ac); });
+        // Its two products alone: A·P, then Pᵀ(A·P) whole and by its upper blocks.
+        const amg::BlockPattern &pa = L.A_blocks->pattern, &pp = L.P_blocks.pattern, &pr = L.R_blocks.pattern;
+        amg::BlockPattern pap, pac;
+        SparseMatrix AP, C;
+        amg::block_product_pattern(pa, pp, AP, pap);
+        amg::block_product_pattern(pr, pap, C, pac);
+        const std::vector<int> mirror = amg::block_mirror_map(pac);
+        const double t_ap = least(reps, [&] { amg::block_product_values(A, pa, L.T.P, pp, AP, pap); });
+        const double t_rap = least(reps, [&] { amg::block_product_values(L.T.R, pr, AP, pap, C, pac); });
+        const double t_up = least(reps, [&] { amg::block_product_values(L.T.R, pr, AP, pap, C, pac, &mirror); });
+        std::printf("  level %d: A*P %.4f s (nnz %ld), P^T(AP) %.4f s, by its upper blocks %.4f s\n", l, t_ap,
+                    (long)AP.nonZeros(), t_rap, t_up);
+      } else {
         g.build(L.T.R, A, L.T.P, Ac, L.nodes, h.level(l + 1).nodes);
+      }
       galerkin = least(reps, [&] { g.refresh(L.T.R, A, L.T.P, Ac); });
       Vector b = Vector::Random(A.rows()), y = Vector::Zero(A.rows());
       smooth = least(reps, [&] {
@@ -113,8 +135,8 @@ void measure(const SparseMatrix& K, const Vector& f, const Eigen::MatrixXd& rigi
       const double passes = 2.0 * so.sweeps * (so.kind.find("chebyshev") != std::string::npos ? so.degree : 1) + 1;
       bytes += S * (passes * A.nonZeros() + 2.0 * L.T.P.nonZeros());
     }
-    std::printf("  level %d: rows %ld nnz %ld (%.0f/row) galerkin refresh %.4f smoother pre+post %.4f s\n", l,
-                (long)A.rows(), (long)A.nonZeros(), double(A.nonZeros()) / A.rows(), galerkin, smooth);
+    std::printf("  level %d: rows %ld nnz %ld (%.0f/row) galerkin refresh %.4f (full block product %.4f) smoother pre+post %.4f s\n",
+                l, (long)A.rows(), (long)A.nonZeros(), double(A.nonZeros()) / A.rows(), galerkin, galerkin_full, smooth);
   }
   std::printf("  V-cycle reads >= %.1f MB: %.4f s at the triad's %.1f GB/s\n", bytes / 1e6, bytes / bandwidth,
               bandwidth / 1e9);

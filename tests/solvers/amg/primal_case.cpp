@@ -152,4 +152,10 @@ RelativeResidual PrimalCase::dual_measure() const {
 
 Vector PrimalCase::recover(const Vector& dx) const { return (b - J * dx).cwiseQuotient(alpha_tilde); }
 
+const TwoStates& two_cloth_states() {
+  static const TwoStates s{primal_case("cloth_hang", {{"resolution", "24"}}, 3, 0),
+                           primal_case("cloth_hang", {{"resolution", "24"}}, 3, 1)};
+  return s;
+}
+
 }  // namespace xb::test

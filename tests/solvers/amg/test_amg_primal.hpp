@@ -40,6 +40,13 @@ struct PrimalCase {
 PrimalCase primal_case(const std::string& scene, const std::vector<std::pair<std::string, std::string>>& overrides,
                        int frames = 0, int iterations = 0);
 
+// The primal K of a small cloth (cloth_hang 24², 3 frames) at outer iterations 0 and 1: the same
+// pattern, new values (the lazy setup's tests: test_hierarchy.cpp, test_refresh_rule.cpp).
+struct TwoStates {
+  PrimalCase a, b;
+};
+const TwoStates& two_cloth_states();
+
 // K's pattern filled by new values: the same construction at a slightly moved state.
 SparseMatrix primal_matrix(const Problem& prob, const Eigen::Matrix3Xd& x, double h, SparseMatrix* J_out = nullptr);
 

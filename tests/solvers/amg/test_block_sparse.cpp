@@ -1,6 +1,7 @@
 // The node-block products of block levels (block_sparse.hpp) against the scalar CSR products on
 // real primal-form systems: K·T, the smoothed P, the Galerkin product and its refresh,
 // on level 0 (3×3 blocks) and on a coarse level whose nodes have 3, 5 or 6 unknowns.
+#include "core/error.hpp"
 #include "solvers/amg/block_sparse.hpp"
 #include "solvers/amg/galerkin.hpp"
 #include "solvers/amg/hierarchy.hpp"
@@ -130,6 +131,47 @@ TEST(AmgBlockSparse, RefreshEqualsAFreshProduct) {
   expect_same(Ac, Ac_fresh, "refresh vs fresh block build");
   for (long k = 0; k < Ac.nonZeros(); ++k) ASSERT_EQ(Ac.valuePtr()[k], Ac_fresh.valuePtr()[k]);
   expect_same(Ac, galerkin_product(S.R, K2, S.P), "refresh vs scalar");
+}
+
+// The symmetric Galerkin product (blocks on and above the diagonal, the rest mirrored: the
+// hierarchy's) equals the full one to round-off, is exactly symmetric, and its refresh equals a
+// fresh symmetric build bit for bit; unequal coarse nodes (3 and 6 columns) included.
+TEST(AmgBlockSparse, SymmetricGalerkinProductMirrorsTheUpperBlocks) {
+  const SparseMatrix& K = bar().K;
+  const NodeLayout nodes = NodeLayout::uniform(static_cast<int>(K.rows()), 3);
+  const Tentative T = tentative_with_small_aggregate(K, nodes, bar().rigid);
+  const NodeLayout coarse{T.col_start};
+  const SmoothedProlongator S = smooth_prolongator(K, T.P, JacobiDiagonal::Block, nodes, 20, 1, coarse);
+  BlockPattern pr, pk, pp;
+  ASSERT_TRUE(pr.build(S.R, coarse, nodes) && pk.build(K, nodes, nodes) && pp.build(S.P, nodes, coarse));
+  GalerkinProduct g;
+  SparseMatrix Ac;
+  g.build(S.R, K, S.P, Ac, pr, pk, pp, true);
+  expect_same(Ac, galerkin_product(S.R, K, S.P), "symmetric P^T K P");
+  const SparseMatrix AcT = SparseMatrix(Ac.transpose());
+  ASSERT_EQ(AcT.nonZeros(), Ac.nonZeros());
+  for (long k = 0; k < Ac.nonZeros(); ++k) ASSERT_EQ(Ac.valuePtr()[k], AcT.valuePtr()[k]) << "not exactly symmetric at " << k;
+  SparseMatrix K2 = K;
+  const Vector noise = xb::test::random_vector(K2.nonZeros(), 4);
+  for (long k = 0; k < K2.nonZeros(); ++k) K2.valuePtr()[k] *= 1.0 + 0.1 * noise[k];
+  K2 = SparseMatrix(0.5 * (K2 + SparseMatrix(K2.transpose())));
+  ASSERT_EQ(K2.nonZeros(), K.nonZeros());
+  g.refresh(S.R, K2, S.P, Ac);
+  GalerkinProduct fresh;
+  SparseMatrix Ac2;
+  fresh.build(S.R, K2, S.P, Ac2, pr, pk, pp, true);
+  for (long k = 0; k < Ac.nonZeros(); ++k) ASSERT_EQ(Ac.valuePtr()[k], Ac2.valuePtr()[k]);
+  expect_same(Ac, galerkin_product(S.R, K2, S.P), "symmetric refresh");
+  // A pattern without a mirror block, or not square, is refused.
+  BlockPattern one_sided;  // blocks (0, 0), (1, 0), (1, 1): (1, 0) has no (0, 1)
+  one_sided.row_start = one_sided.col_start = {0, 3, 6};
+  one_sided.ptr = {0, 1, 3};
+  one_sided.col = {0, 0, 1};
+  one_sided.offset = {0, 0, 3};
+  EXPECT_THROW(block_mirror_map(one_sided), Error);
+  one_sided.col = {0, 1, 1};  // (0, 0), (1, 1), (1, 1)... as (1, 1) twice: no block below the diagonal
+  EXPECT_EQ(block_mirror_map(one_sided), (std::vector<int>{-1, -1, -1}));
+  EXPECT_THROW(block_mirror_map(pp), Error);  // P: rows and columns are different nodes
 }
 
 // Every level of a primal hierarchy (block products throughout) equals the scalar products of

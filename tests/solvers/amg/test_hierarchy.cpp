@@ -108,23 +108,12 @@ TEST(AmgBlockOptions, AutoResolvesByBlockSizeAndRigidNeedsABasis) {
   EXPECT_THROW(resolve_options(o, {}), Error);
 }
 
-namespace {
-// The primal K of a small cloth one outer iteration apart (same pattern, new values).
-struct TwoStates {
-  xb::test::PrimalCase a, b;
-};
-const TwoStates& two_states() {
-  static const TwoStates s{xb::test::primal_case("cloth_hang", {{"resolution", "24"}}, 3, 0),
-                           xb::test::primal_case("cloth_hang", {{"resolution", "24"}}, 3, 1)};
-  return s;
-}
-}  // namespace
 
 // amg.coarse_refresh_interval = 2: the first refresh after a setup renews level 0's smoother (and
 // its float copy) but keeps A_1 = Pᵀ A_old P; the second recomputes A_1 from the new values. At 1
 // (the default) every refresh does. The V-cycle stays SPD either way.
 TEST(AmgLazySetup, CoarseRefreshIntervalLagsTheCoarseLevels) {
-  const TwoStates& s = two_states();
+  const TwoStates& s = two_cloth_states();
   const SparseMatrix &K1 = s.a.K, &K2 = s.b.K;
   ASSERT_EQ(K1.nonZeros(), K2.nonZeros());
   for (const int k : {1, 2}) {
@@ -162,7 +151,7 @@ TEST(AmgLazySetup, CoarseRefreshIntervalLagsTheCoarseLevels) {
 // amg.prolongator_drop_tolerance: a sparser smoothed P (R still Pᵀ), so fewer non-zeros in A_1
 // and in the operator complexity; a V-cycle that still preconditions CG. 0 keeps every block.
 TEST(AmgLazySetup, ProlongatorDropToleranceThinsPAndTheCoarseLevels) {
-  const xb::test::PrimalCase& c = two_states().a;
+  const xb::test::PrimalCase& c = two_cloth_states().a;
   std::vector<long> p_nnz;
   std::vector<double> oc;
   for (const double tol : {0.0, 0.3}) {
