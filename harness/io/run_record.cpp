@@ -202,6 +202,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   if (!L.relative_gradient_floor.empty()) {  // step = newton
     r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;
     r.datasets["active_bounds"] = L.active_bounds;
+    r.datasets["hessian_time"] = L.hessian_time;
   }
   if (!L.reference_status.empty()) {
     // The reference of every substep (harness/sim/reference.hpp) and the error against it.

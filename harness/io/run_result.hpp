@@ -44,9 +44,11 @@ struct IterationLog {
   // stiffness full: those with a negative eigenvalue that the projection changed).
   std::vector<long long> projected_elements;
   // step = newton only, per entry: the rounding floor of ‖∇E‖ (harness/sim/newton.hpp) over its
-  // value at x̃, and the particles held on a plane (contact's active bounds).
+  // value at x̃, the particles held on a plane (contact's active bounds), and the step's element
+  // Hessians' time (outside fill_time, which is K's).
   std::vector<double> relative_gradient_floor;
   std::vector<long long> active_bounds;
+  std::vector<double> hessian_time;  // s of that step filling the element Hessians (all its tries)
   std::vector<long long> linear_iterations;
   std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
   std::vector<double> linear_tolerance;  // the relative tolerance that step was given (linear.forcing)

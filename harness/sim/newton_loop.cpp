@@ -54,7 +54,7 @@ bool NewtonLoop::direction(int it, double relative, const Eigen::Matrix3Xd& x, S
   for (;;) {
     const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &active_, step_.elements() != nullptr};
     if (hooks.phase) hooks.phase("the fill of the element Hessians");
-    rec.fill += step_.prepare(in);
+    rec.hessians += step_.prepare(in);
     if (hooks.on_system && hooks.on_system(in, it)) {
       out.reason = StopReason::interrupted;
       return false;
@@ -62,7 +62,7 @@ bool NewtonLoop::direction(int it, double relative, const Eigen::Matrix3Xd& x, S
     const SetupKind kind = first_setup_ ? SetupKind::Structure : SetupKind::Values;
     first_setup_ = false;
     if (hooks.phase) hooks.phase("the setup and solve of the Newton step");
-    const LinearStats st = step_.solve(in, kind, SetupContext{0, 0, it}, dlambda_, dx_);
+    const LinearStats st = step_.solve(in, kind, SetupContext{hooks.frame, hooks.substep, it}, dlambda_, dx_);
     rec.fill += step_.primal_fill_time();
     rec.linear = st;
     rec.action = step_.solver().last_setup_action();

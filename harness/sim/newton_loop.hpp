@@ -43,7 +43,8 @@ constexpr double floor_factor = 1, floor_factor_failed = 1e2;
 struct StepRecord {
   LinearStats linear;
   double time = 0;       // s in the whole step (fill, setup, solve, line search)
-  double fill = 0;       // s filling the element Hessians and K
+  double fill = 0;       // s filling K (inside the linear setup time), over the step's tries
+  double hessians = 0;   // s filling the element Hessians (and, under XPBD, A), over the step's tries
   double length = 0;     // the line search's t (or ω)
   double tolerance = 0;  // the linear solve's relative tolerance
   int trials = 0;        // line-search trials
@@ -74,6 +75,7 @@ struct NewtonHooks {
   std::function<bool()> proceed;                                    // before each step; false: stop (interrupted)
   std::function<bool(const GlobalStepInput&, int it)> on_system;    // true: stop (interrupted; capture)
   std::function<void(const std::string&)> phase;                    // where the loop is (messages)
+  int frame = 0, substep = 0;                                       // for the solver's SetupContext
 };
 
 struct NewtonOutcome {

@@ -10,6 +10,8 @@ namespace xb::detail {
 void Simulation::newton_substep(int frame, int sub) {
   Particles& P = prob_.particles;
   NewtonHooks hooks;
+  hooks.frame = frame;
+  hooks.substep = sub;
   hooks.tolerance = [this](int it, double gradient) { return forcing_.next(it, gradient); };
   hooks.on_iterate = [&](const NewtonIterate& v) {
     frame_ = frame;
@@ -26,6 +28,7 @@ void Simulation::newton_substep(int frame, int sub) {
     energy_ = v.energy;
     log_entry(frame, sub, v.iteration, {dual, authors, v.gradient * h2, v.energy}, v.last);
     res_.log.relative_gradient_floor.push_back(v.gradient0 > 0 ? v.floor / v.gradient0 : 0);
+    res_.log.hessian_time.push_back(v.last.hessians);
     res_.log.active_bounds.push_back(v.active);
     if (v.iteration > 0) ++res_.outer_iterations;
     if (opt_.on_iteration)
