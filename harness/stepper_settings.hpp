@@ -5,6 +5,7 @@
 #include "../core/settings.hpp"
 
 #include <string>
+#include <vector>
 
 namespace xb {
 
@@ -38,8 +39,11 @@ struct StepperSettings {
   // eigenvalues to 0) | abs (to their absolute value) | adaptive (step = newton: clamp until ‖∇E‖ falls
   // below exact_hessian_below of its first value, then the exact Hessian while it gives a descent
   // direction, clamp again for a step where it does not).
+  // on_demand, progressive and trust_region are strategies of step = newton (harness/sim/hessian_projection.hpp).
   std::string hessian_projection = "clamp";
   double exact_hessian_below = 1e-2;
+  // step = newton's line search on E (harness/sim/energy_line_search.hpp): robust_armijo | armijo.
+  std::string line_search = "robust_armijo";
   // The reference solution of --reference (harness/sim/reference.hpp): newton (Newton on E, the
   // backward-Euler solution; every α̃ > 0) | xpbd (XPBD's fixed point by CHOLMOD) | auto (newton
   // where every α̃ > 0, else xpbd).
@@ -47,5 +51,7 @@ struct StepperSettings {
 };
 
 const SettingTable<StepperSettings>& stepper_settings();
+// The values of xpbd.hessian_projection (harness/sim/hessian_projection.hpp).
+const std::vector<std::string>& hessian_projection_choices();
 
 }  // namespace xb

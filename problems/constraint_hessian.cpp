@@ -58,15 +58,17 @@ Matrix6d distance_geometric_stiffness(const Eigen::Vector3d& p, const Eigen::Vec
 }
 
 Matrix6d distance_energy_hessian(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double rest, double alpha_tilde,
-                                 Projection proj, double* C, Eigen::Vector3d* grad_p, Eigen::Vector3d* grad_q) {
+                                 Projection proj, double* C, Eigen::Vector3d* grad_p, Eigen::Vector3d* grad_q,
+                                 double* smallest, double tolerance) {
   Eigen::Vector3d gp, gq;
   const double c = distance_constraint(p, q, rest, &gp, &gq);
   if (C) *C = c;
   if (grad_p) *grad_p = gp, *grad_q = gq;
   const double l = (p - q).norm();
+  if (smallest) *smallest = l > 0 ? std::min(c / l, 1.0) / alpha_tilde : 0.0;
   if (!(l > 0)) return Matrix6d::Zero();
   const Eigen::Matrix3d nn = gp * gp.transpose();
-  const double transverse = project_eigenvalue(c / l, proj);
+  const double transverse = c / l < -tolerance ? project_eigenvalue(c / l, proj) : c / l;
   return pair_block((nn + transverse * (Eigen::Matrix3d::Identity() - nn)) / alpha_tilde);
 }
 
@@ -151,8 +153,13 @@ Eigen::Matrix<double, 12, 9> modes_in_x(const ArapEigensystem& es, const Eigen::
 Matrix12d tet_modes_to_x(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
                          const Eigen::Matrix<double, 4, 3>& B) {
   const Eigen::Matrix<double, 12, 9> W = modes_in_x(es, B);
-  const Matrix12d H = W * mu.asDiagonal() * W.transpose();
-  return (H + H.transpose()) * 0.5;  // exactly symmetric: K's blocks (p, q) and (q, p) stay transposes
+  const Eigen::Matrix<double, 12, 9> Wmu = W * mu.asDiagonal();
+  // The upper triangle only, mirrored: exactly symmetric (K's blocks (p, q) and (q, p) stay
+  // transposes) at 78 of the 144 dot products.
+  Matrix12d H;
+  for (int c = 0; c < 12; ++c)
+    for (int r = 0; r <= c; ++r) H(r, c) = H(c, r) = Wmu.row(r).dot(W.row(c));
+  return H;
 }
 
 Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu,
@@ -194,26 +201,26 @@ Eigen::Matrix<double, 12, 1> tet_geometric_stiffness_diagonal(const Eigen::Vecto
 
 Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                              const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj,
-                             double* C, std::array<Eigen::Vector3d, 4>* grad) {
+                             double* C, std::array<Eigen::Vector3d, 4>* grad, double* smallest, double tolerance) {
   const Eigen::Matrix3d F = tet_deformation_gradient(x0, x1, x2, x3, Dm_inv);
   Eigen::Matrix3d U, V;
   Eigen::Vector3d s;
   svd_rv(F, U, s, V);
+  // tet_arap_constraint's C and ∇C with Newton's rest_epsilon = 0, from the same SVD
+  const double c = tet_arap_from_svd(F, U, s, V, Dm_inv, grad, 0.0);
+  if (C) *C = c;
+  return tet_energy_hessian_from_svd(F, U, s, V, Dm_inv, alpha_tilde, proj, smallest, tolerance);
+}
+
+Matrix12d tet_energy_hessian_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& s,
+                                      const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, double alpha_tilde,
+                                      Projection proj, double* smallest, double tolerance) {
   const ArapEigensystem es = arap_eigensystem(F, U, s, V);
-  if (C) *C = es.C;
-  if (grad) {  // tet_arap_constraint's formula, from the same SVD
-    if (es.C < tet_rest_epsilon) {
-      for (auto& g : *grad) g.setZero();
-    } else {
-      const Eigen::Matrix3d G = ((F - U * V.transpose()) / es.C) * Dm_inv.transpose();
-      (*grad)[1] = G.col(0);
-      (*grad)[2] = G.col(1);
-      (*grad)[3] = G.col(2);
-      (*grad)[0] = -(G.col(0) + G.col(1) + G.col(2));
-    }
-  }
+  const double lowest = es.psi.minCoeff();
+  if (lowest >= -tolerance) proj = Projection::none;
   Eigen::Matrix<double, 9, 1> mu;
   for (int k = 0; k < 9; ++k) mu[k] = project_eigenvalue(es.psi[k] / alpha_tilde, proj);
+  if (smallest) *smallest = lowest / alpha_tilde;
   return tet_modes_to_x(es, mu, tet_shape_gradients(Dm_inv));
 }
 

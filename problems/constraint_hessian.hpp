@@ -56,10 +56,13 @@ Matrix6d distance_hessian(const Eigen::Vector3d& p, const Eigen::Vector3d& q);
 Matrix6d distance_geometric_stiffness(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double lambda, Projection proj);
 // H = (∇C∇Cᵀ + C∇²C)/α̃: B = (nnᵀ + π(C/l)(I − nnᵀ))/α̃ (the stretch eigenvalue 2/α̃ is never
 // negative; the transverse one 2C/(l α̃) is negative under compression). 0 at l = 0.
-// C and ∇C (distance_constraint's) come out too where asked.
+// C and ∇C (distance_constraint's) come out too where asked, and `smallest`: the smallest eigenvalue
+// of the exact (unprojected) H in its own eigenbasis (negative: the element is indefinite).
+// `tolerance` (≥ 0): proj applies only where the smallest eigenvalue is below −tolerance/α̃ (an
+// element whose negative curvature is mild, relative to its own stiffness 1/α̃, stays exact).
 Matrix6d distance_energy_hessian(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double rest, double alpha_tilde,
                                  Projection proj, double* C = nullptr, Eigen::Vector3d* grad_p = nullptr,
-                                 Eigen::Vector3d* grad_q = nullptr);
+                                 Eigen::Vector3d* grad_q = nullptr, double* smallest = nullptr, double tolerance = 0);
 
 // ---- Tet ARAP, C = ‖F − R‖_F (problems/constraints.hpp), Ψ = ½C² = ½‖F − R‖².
 // With F = UΣVᵀ (rotation-variant: σ₁ ≥ σ₂ ≥ |σ₃|, so every σᵢ + σⱼ ≥ 0), ∇²_F Ψ has the
@@ -111,13 +114,21 @@ Matrix12d tet_arap_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
 // (eigenvalues −λc and ψ/α̃ through π), then mapped to x (Dᵀ(·)D keeps PSD).
 Matrix12d tet_geometric_stiffness(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                                   const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj);
-// tet_energy_hessian also gives C and ∇C (tet_arap_constraint's, from the same SVD) where asked.
+// tet_energy_hessian also gives C and ∇C (tet_arap_constraint's with rest_epsilon = 0, Newton's, from
+// the same SVD) where asked, and
+// `smallest`: min_k ψ_k/α̃, the smallest F-space eigenvalue of the exact H (negative: indefinite);
+// `tolerance` as for the distance: proj applies only where min_k ψ_k < −tolerance.
 // The diagonal of tet_geometric_stiffness.
 Eigen::Matrix<double, 12, 1> tet_geometric_stiffness_diagonal(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
                                                               const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
                                                               const Eigen::Matrix3d& Dm_inv, double lambda, Projection proj);
 Matrix12d tet_energy_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                              const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv, double alpha_tilde, Projection proj,
-                             double* C = nullptr, std::array<Eigen::Vector3d, 4>* grad = nullptr);
+                             double* C = nullptr, std::array<Eigen::Vector3d, 4>* grad = nullptr, double* smallest = nullptr,
+                             double tolerance = 0);
+// The same from F = UΣVᵀ (svd_rv) already at hand: no decomposition (ElementHessians::evaluate keeps them).
+Matrix12d tet_energy_hessian_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& sigma,
+                                      const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, double alpha_tilde,
+                                      Projection proj, double* smallest = nullptr, double tolerance = 0);
 
 }  // namespace xb

@@ -37,7 +37,7 @@ void svd_rv(const Eigen::Matrix3d& F, Eigen::Matrix3d& U, Eigen::Vector3d& sigma
 
 double tet_arap_constraint(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
                            const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
-                           const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad) {
+                           const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad, double rest_epsilon) {
   Eigen::Matrix3d Ds;
   Ds.col(0) = x1 - x0;
   Ds.col(1) = x2 - x0;
@@ -46,9 +46,15 @@ double tet_arap_constraint(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
   Eigen::Matrix3d U, V;
   Eigen::Vector3d s;
   svd_rv(F, U, s, V);
+  return tet_arap_from_svd(F, U, s, V, Dm_inv, grad, rest_epsilon);
+}
+
+double tet_arap_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& s,
+                         const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad,
+                         double rest_epsilon) {
   const double C = std::sqrt((s.array() - 1.0).square().sum());
   if (grad) {
-    if (C < tet_rest_epsilon) {
+    if (C < rest_epsilon || C == 0) {
       for (auto& g : *grad) g.setZero();
     } else {
       const Eigen::Matrix3d dCdF = (F - U * V.transpose()) / C;

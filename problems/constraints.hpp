@@ -32,6 +32,9 @@ double distance_constraint(const Eigen::Vector3d& p, const Eigen::Vector3d& q, d
 // zero, so the constraint's row of A is α̃ alone and it exerts no force — which is its
 // physical force λ∇C → 0 at rest. At compliance 0 such a row is singular, and a global
 // solver reports it (status breakdown).
+// Newton on E (harness/sim/newton.hpp) needs C∇C = (F − R)·Dm⁻ᵀ-columns, the gradient of ½C², which
+// has no kink: it evaluates with rest_epsilon = 0 (∇C zero only at C = 0 exactly), since the cut
+// at 1e-9 leaves out up to 1e-9·|∇C|/α̃ per element and stalls ‖∇E‖ there (cantilever: 2.5e-7).
 constexpr double tet_rest_epsilon = 1e-9;
 
 struct TetArapBatch {
@@ -43,9 +46,13 @@ struct TetArapBatch {
 };
 double tet_arap_constraint(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
                            const Eigen::Vector3d& x2, const Eigen::Vector3d& x3,
-                           const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad);
+                           const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad, double rest_epsilon = tet_rest_epsilon);
 
 // Rotation-variant SVD of a 3×3 matrix: F = U diag(sigma) Vᵀ with U, V proper rotations.
 void svd_rv(const Eigen::Matrix3d& F, Eigen::Matrix3d& U, Eigen::Vector3d& sigma, Eigen::Matrix3d& V);
+// The tet's C and (if grad) ∇C from F = UΣVᵀ already at hand (tet_arap_constraint's formula).
+double tet_arap_from_svd(const Eigen::Matrix3d& F, const Eigen::Matrix3d& U, const Eigen::Vector3d& sigma,
+                         const Eigen::Matrix3d& V, const Eigen::Matrix3d& Dm_inv, std::array<Eigen::Vector3d, 4>* grad,
+                         double rest_epsilon = tet_rest_epsilon);
 
 }  // namespace xb

@@ -153,6 +153,18 @@ void DualSystem::apply_gradT(const ConstraintState& s, const Eigen::VectorXd& y,
   }
 }
 
+void DualSystem::apply_abs_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const {
+  const int n = prob_.particles.size();
+  out.resize(3, n);
+#pragma omp parallel for schedule(static)
+  for (int p = 0; p < n; ++p) {
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k)
+      acc += s.grad[inc_[k].constraint][inc_[k].slot].cwiseAbs() * y[inc_[k].constraint];
+    out.col(p) = acc;
+  }
+}
+
 void DualSystem::apply_minv_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const {
   apply_gradT(s, y, out);
   const Eigen::VectorXd& w = prob_.particles.w;

@@ -39,6 +39,8 @@ class DualSystem {
                         Eigen::Matrix3Xd& out) const;
   // out = ∇Cᵀ y (per particle, including pinned ones).
   void apply_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const;
+  // The same with every gradient entry by its absolute value (y ≥ 0: a bound on |Jᵀy|'s terms).
+  void apply_abs_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const;
 
   // Particle p's constraints and the slot p holds in each.
   struct Incidence {

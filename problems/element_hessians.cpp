@@ -1,6 +1,7 @@
 #include "element_hessians.hpp"
 
 #include "../core/error.hpp"
+#include "constraints.hpp"
 
 #include <numeric>
 
@@ -69,33 +70,76 @@ void ElementHessians::fill_geometric_stiffness(const Eigen::Matrix3Xd& x, const 
   }
 }
 
-void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
-                                         ConstraintState* state) {
+void ElementHessians::evaluate(const Eigen::Matrix3Xd& x, ConstraintState& state) {
+  const int m = prob_.num_constraints(), nd = static_cast<int>(prob_.distance.size());
+  state.C.resize(m);
+  state.grad.resize(m);
+  svd_.resize(prob_.tets.size());
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) {
+    auto& g = state.grad[j];
+    if (j < nd) {
+      const auto& e = prob_.distance.idx[j];
+      state.C[j] = distance_constraint(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j], &g[0], &g[1]);
+      g[2].setZero();
+      g[3].setZero();
+    } else {
+      const int t = j - nd;
+      const auto& e = prob_.tets.idx[t];
+      const Eigen::Matrix3d F = tet_deformation_gradient(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[t]);
+      Svd& d = svd_[t];
+      svd_rv(F, d.U, d.sigma, d.V);
+      state.C[j] = tet_arap_from_svd(F, d.U, d.sigma, d.V, prob_.tets.Dm_inv[t], &g, 0.0);
+    }
+  }
+}
+
+void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde,
+                                          const ElementProjection& proj, ConstraintState* state, bool reuse_svd) {
+  if (reuse_svd && (state || svd_.size() != prob_.tets.size()))
+    throw Error("energy Hessian: reuse_svd needs a previous evaluate() and no state");
   const int m = prob_.num_constraints(), nd = static_cast<int>(prob_.distance.size());
   for (int j = 0; j < m; ++j)
     if (!(alpha_tilde[j] > 0))
       throw Error("energy Hessian: constraint " + std::to_string(j) + " has alpha~ = " + std::to_string(alpha_tilde[j]) +
                   " (E = sum C^2/(2 alpha) needs every alpha~ > 0)");
   blocks_.resize(nd, static_cast<int>(prob_.tets.size()));
+  smallest_.resize(m);
   if (state) {
     state->C.resize(m);
     state->grad.resize(m);
   }
-#pragma omp parallel for schedule(static)
+  int indefinite = 0, projected = 0;  // integer counts: any order gives the same sums
+#pragma omp parallel for schedule(static) reduction(+ : indefinite, projected)
   for (int j = 0; j < m; ++j) {
     double* C = state ? &state->C[j] : nullptr;
     std::array<Eigen::Vector3d, 4>* g = state ? &state->grad[j] : nullptr;
+    const Projection pj = proj.base;
     if (j < nd) {
       const auto& e = prob_.distance.idx[j];
-      blocks_.matrix(j) = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j],
-                                                        alpha_tilde[j], proj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr);
+      blocks_.matrix(j) = distance_energy_hessian(x.col(e[0]), x.col(e[1]), prob_.distance.rest_length[j], alpha_tilde[j],
+                                                  pj, C, g ? &(*g)[0] : nullptr, g ? &(*g)[1] : nullptr, &smallest_[j],
+                                                  proj.tolerance);
       if (g) (*g)[2].setZero(), (*g)[3].setZero();
     } else {
-      const auto& e = prob_.tets.idx[j - nd];
-      blocks_.matrix(j) = tet_energy_hessian(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[j - nd],
-                                      alpha_tilde[j], proj, C, g);
+      const int t = j - nd;
+      const auto& e = prob_.tets.idx[t];
+      if (reuse_svd) {
+        const Eigen::Matrix3d F = tet_deformation_gradient(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[t]);
+        blocks_.matrix(j) = tet_energy_hessian_from_svd(F, svd_[t].U, svd_[t].sigma, svd_[t].V, prob_.tets.Dm_inv[t],
+                                                        alpha_tilde[j], pj, &smallest_[j], proj.tolerance);
+      } else {
+        blocks_.matrix(j) = tet_energy_hessian(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[t],
+                                               alpha_tilde[j], pj, C, g, &smallest_[j], proj.tolerance);
+      }
+    }
+    if (smallest_[j] < 0) {
+      ++indefinite;
+      if (pj != Projection::none && smallest_[j] * alpha_tilde[j] < -proj.tolerance) ++projected;
     }
   }
+  indefinite_ = indefinite;
+  projected_ = projected;
 }
 
 void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda,

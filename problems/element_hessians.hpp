@@ -50,6 +50,15 @@ class ElementMatrices {
   std::vector<double> values_;
 };
 
+// How fill_energy_hessian projects the elements: by `base`, but only those whose smallest exact
+// eigenvalue is below −tolerance in units of their own stiffness 1/α̃_j (ψ < −tolerance for a tet;
+// 0: every indefinite element). The progressive strategy (harness/sim/hessian_projection.hpp)
+// leaves the mildly indefinite elements exact this way.
+struct ElementProjection {
+  Projection base = Projection::clamp;
+  double tolerance = 0;
+};
+
 class ElementHessians {
  public:
   // Keeps a reference to prob (its constraints and masses; positions are passed in).
@@ -61,8 +70,23 @@ class ElementHessians {
   // With `state`, also evaluate_constraints(prob, x, *state) from the same SVDs (identical values),
   // so a Newton iteration needs one pass over the constraints, not two.
   void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Projection proj,
-                           ConstraintState* state = nullptr);
+                           ConstraintState* state = nullptr) {
+    fill_energy_hessian(x, alpha_tilde, ElementProjection{proj, 0}, state);
+  }
+  // reuse_svd: x is the point of the last evaluate(), whose tet SVDs are used (no decomposition).
+  void fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, const ElementProjection& proj,
+                           ConstraintState* state = nullptr, bool reuse_svd = false);
+  // Newton's evaluation at x (problems/constraints.hpp with rest_epsilon = 0): every constraint's C
+  // and ∇C into `state`, each tet's SVD kept for the next fill_energy_hessian(…, reuse_svd = true)
+  // at the same x, so an iteration decomposes each element once.
+  void evaluate(const Eigen::Matrix3Xd& x, ConstraintState& state);
   const ElementMatrices& blocks() const { return blocks_; }
+  // After fill_energy_hessian, per constraint: the smallest eigenvalue of its exact (unprojected)
+  // H_j in the closed-form eigenbasis (problems/constraint_hessian.hpp); negative: indefinite.
+  const std::vector<double>& smallest_eigenvalues() const { return smallest_; }
+  // Of the last fill: elements with a negative eigenvalue, and those among them it projected.
+  int indefinite_elements() const { return indefinite_; }
+  int projected_elements() const { return projected_; }
 
   // §1.4's diagonal: kd(:, p) = max(0, the diagonal of Σ_j π(G_j)'s (p, p) block) per dof, for every
   // particle (pinned ones 0). proj = none sums the exact blocks and clamps the sums; clamp/abs sum
@@ -75,6 +99,13 @@ class ElementHessians {
   ElementMatrices blocks_;
   std::vector<std::array<Eigen::Vector3d, 4>> diag_;  // per constraint and slot: its block's diagonal
   std::vector<int> inc_start_, inc_;                   // particle → (constraint << 2 | slot)
+  std::vector<double> smallest_;
+  int indefinite_ = 0, projected_ = 0;
+  struct Svd {
+    Eigen::Matrix3d U, V;
+    Eigen::Vector3d sigma;
+  };
+  std::vector<Svd> svd_;  // per tet, of the last evaluate()
 };
 
 // Per-dof inverse masses of M̃ = M + K̃_d: w_dof(d, p) = 1/(1/w_p + kd(d, p)), 0 where w_p = 0.

@@ -198,6 +198,22 @@ void PrimalSystem::fill_energy_hessian(const ElementMatrices& H) {
   fill_values<false, true>(nullptr, nullptr, &H);
 }
 
+void PrimalSystem::fix_dofs(const std::vector<int>& dofs) {
+  const int* outer = K_.outerIndexPtr();
+  const int* cols = K_.innerIndexPtr();
+  double* val = K_.valuePtr();
+  for (int d : dofs) {
+    for (int k = outer[d]; k < outer[d + 1]; ++k) {
+      const int c = cols[k];
+      if (c == d) continue;
+      val[k] = 0;
+      // The symmetric entry (c, d): the pattern is symmetric and each row's columns sorted.
+      const int* hit = std::lower_bound(cols + outer[c], cols + outer[c + 1], d);
+      if (hit != cols + outer[c + 1] && *hit == d) val[hit - cols] = 0;
+    }
+  }
+}
+
 template <bool kGaussNewton, bool kBlocks>
 void PrimalSystem::fill_values(const Gradients* grad, const Eigen::Matrix3Xd* kd, const ElementMatrices* blocks) {
   const int nb = static_cast<int>(free_.size());

@@ -68,6 +68,10 @@ class PrimalSystem {
   // Newton on E: K = M + Σ_j H_j = Δt²∇²E, H_j the (projected) element Hessians of ½C_j²/α̃_j,
   // which hold the Gauss–Newton part already (no Jᵀα̃⁻¹J is added).
   void fill_energy_hessian(const ElementMatrices& H);
+  // Holds the listed dofs (K's row numbers) in the step: their rows and columns become zero but
+  // for the diagonal, which is kept, so a zero right-hand side there gives Δx = 0 (the active
+  // bounds of contact, harness/sim/plane_bounds.hpp). K stays SPD where it was. After a fill.
+  void fix_dofs(const std::vector<int>& dofs);
   // f = Jᵀ α̃⁻¹ b.
   void rhs(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Vector& b, Vector& f) const;
   // Δλ = α̃⁻¹ (b − J Δx).

@@ -35,7 +35,7 @@ void Problem::check() const {
   }
 }
 
-void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, ConstraintState& out) {
+void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, ConstraintState& out, double rest_epsilon) {
   const int nd = static_cast<int>(prob.distance.size());
   const int m = prob.num_constraints();
   out.C.resize(m);
@@ -51,7 +51,7 @@ void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, Constr
     } else {
       const int t = j - nd;
       const auto& e = prob.tets.idx[t];
-      out.C[j] = tet_arap_constraint(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob.tets.Dm_inv[t], &g);
+      out.C[j] = tet_arap_constraint(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob.tets.Dm_inv[t], &g, rest_epsilon);
     }
   }
 }

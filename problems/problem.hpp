@@ -47,8 +47,10 @@ struct ConstraintState {
   std::vector<std::array<Eigen::Vector3d, 4>> grad;
 };
 
-// Evaluates every constraint at x (in parallel).
-void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, ConstraintState& out);
+// Evaluates every constraint at x (in parallel); rest_epsilon: tet ARAP's gradient cut at rest
+// (problems/constraints.hpp; 0 for Newton on E).
+void evaluate_constraints(const Problem& prob, const Eigen::Matrix3Xd& x, ConstraintState& out,
+                          double rest_epsilon = tet_rest_epsilon);
 
 // Projects every free particle below a plane collider onto it (after each step, as the paper does).
 void project_onto_planes(const Problem& prob, Eigen::Matrix3Xd& x);

@@ -117,6 +117,7 @@ const LogArray log_arrays[] = {
     {"step_length", &IterationLog::step_length, true},
     {"line_search_trials", &IterationLog::line_search_trials, true},
     {"exact_hessian", &IterationLog::exact_hessian, true},
+    {"projected_elements", &IterationLog::projected_elements, true},
     {"fill_time", &IterationLog::fill_time, true},
     {"linear_iterations", &IterationLog::linear_iterations, true},
     {"linear_setup_time", &IterationLog::linear_setup_time, true},
@@ -197,6 +198,12 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   const bool global = m && !m->local;
   for (const auto& a : log_arrays)
     if (!a.global_only || global) std::visit([&](auto member) { r.datasets[a.name] = L.*member; }, a.member);
+  r.datasets["substep_status"] = L.substep_status;
+  if (!L.relative_gradient_floor.empty()) {  // step = newton
+    r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;
+    r.datasets["active_bounds"] = L.active_bounds;
+    r.datasets["hessian_time"] = L.hessian_time;
+  }
   if (!L.reference_status.empty()) {
     // The reference of every substep (harness/sim/reference.hpp) and the error against it.
     r.attrs["reference_method"] = res.reference_method;
@@ -204,7 +211,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     long long unconverged = 0;
     for (size_t i = 0; i < L.reference_status.size(); ++i) {
       worst = std::max(worst, L.reference_relative_dual_residual[i]);
-      if (L.reference_status[i] != "converged") ++unconverged;
+      if (L.reference_status[i] != "converged" && L.reference_status[i] != "rounding_floor") ++unconverged;
     }
     r.attrs["reference_dual_residual"] = worst;
     r.attrs["reference_substeps_unconverged"] = unconverged;
@@ -213,6 +220,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
     r.datasets["reference/iterations"] = L.reference_iterations;
     r.datasets["reference/status"] = L.reference_status;
+    r.datasets["reference/time"] = L.reference_time;
     if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
   }
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());

@@ -40,6 +40,15 @@ struct IterationLog {
   // The line search's trials in the step that led here (step = line_search | newton; else 0), and
   // whether that step used the exact element Hessians (step = newton, xpbd.hessian_projection = adaptive).
   std::vector<long long> line_search_trials, exact_hessian;
+  // Global methods: the elements whose Hessian that step projected (step = newton; geometric
+  // stiffness full: those with a negative eigenvalue that the projection changed).
+  std::vector<long long> projected_elements;
+  // step = newton only, per entry: the rounding floor of ‖∇E‖ (harness/sim/newton.hpp) over its
+  // value at x̃, the particles held on a plane (contact's active bounds), and the step's element
+  // Hessians' time (outside fill_time, which is K's).
+  std::vector<double> relative_gradient_floor;
+  std::vector<long long> active_bounds;
+  std::vector<double> hessian_time;  // s of that step filling the element Hessians (all its tries)
   std::vector<long long> linear_iterations;
   std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
   std::vector<double> linear_tolerance;  // the relative tolerance that step was given (linear.forcing)
@@ -56,10 +65,17 @@ struct IterationLog {
   std::vector<double> reference_relative_energy_gradient;  // ‖∇E‖/‖∇E(x̃)‖ of the reference (every α̃ > 0)
   std::vector<long long> reference_iterations;
   std::vector<std::string> reference_status;
+  std::vector<double> reference_time;  // s of each substep's reference (off every clock)
+  // Per substep, how its outer loop ended: converged | max_iterations for XPBD's methods; under
+  // step = newton the stop reason (harness/sim/stop_reason.hpp: converged, rounding_floor,
+  // max_iterations, line_search_failed). A substep that ends the run has none.
+  std::vector<std::string> substep_status;
 };
 
 struct RunResult {
-  std::string status = "ok";  // ok | max_iterations | diverged | nan | breakdown | timeout | error
+  // ok | max_iterations | line_search_failed | reference_unconverged | diverged | nan | breakdown |
+  // timeout | error (results/README.md)
+  std::string status = "ok";
   std::string message;
   std::string form_used;      // dual | primal for global methods, none for local sweeps
   IterationLog log;

@@ -52,7 +52,8 @@ double GlobalStep::prepare(const GlobalStepInput& in) {
     elements_->geometric_stiffness_diagonal(in.x, in.lambda, kd_);
     shifted_inverse_masses(prob_.particles.w, kd_, minv_);
   } else if (stiffness_ == "full" && newton_) {
-    elements_->fill_energy_hessian(in.x, alpha_tilde_, in.projection);
+    elements_->fill_energy_hessian(in.x, alpha_tilde_, in.elements ? *in.elements : ElementProjection{in.projection},
+                                   nullptr, in.evaluated);
   } else if (stiffness_ == "full") {
     elements_->fill_geometric_stiffness(in.x, in.lambda, in.projection);
   }
@@ -106,17 +107,30 @@ LinearStats GlobalStep::solve(const GlobalStepInput& in, SetupKind kind, SetupCo
     top_.inv_mass = &minv_dof_;
     top_.fill = [this, &grad](PrimalSystem& sys) { sys.fill_with_diagonal(grad, alpha_tilde_, kd_); };
   } else if (stiffness_ == "full" && newton_) {
-    top_.fill = [this](PrimalSystem& sys) { sys.fill_energy_hessian(elements_->blocks()); };
+    held_dofs_.clear();
+    if (in.held && !in.held->empty()) {  // y of particle free[i] is K's row 3i + 1
+      std::vector<int> block(prob_.particles.size(), -1);
+      for (long i = 0; i < nb; ++i) block[free[i]] = static_cast<int>(i);
+      for (int p : *in.held)
+        if (block[p] >= 0) held_dofs_.push_back(3 * block[p] + 1);
+    }
+    top_.fill = [this](PrimalSystem& sys) {
+      sys.fill_energy_hessian(elements_->blocks());
+      sys.fix_dofs(held_dofs_);
+    };
   } else if (stiffness_ == "full") {
     top_.fill = [this, &grad](PrimalSystem& sys) { sys.fill_with_blocks(grad, alpha_tilde_, elements_->blocks()); };
   }
   primal_->setup(in.state.grad, alpha_tilde_, in.x, kind, ctx, top_);
   g_dof_.resize(3 * nb);
   for (long i = 0; i < nb; ++i) g_dof_.segment<3>(3 * i) = in.g.col(free[i]);
+  for (int d : held_dofs_) g_dof_[d] = 0;
   const LinearStats st = primal_->solve(in.b, dlambda, keep_ ? &g_dof_ : nullptr, &dx_dof_);
   dx.setZero(3, prob_.particles.size());
-  if (dx_dof_.size() == 3 * nb)
+  if (dx_dof_.size() == 3 * nb) {
+    for (int d : held_dofs_) dx_dof_[d] = 0;  // exactly: Jᵀα̃⁻¹b (≈ 0 under newton) is not zeroed
     for (long i = 0; i < nb; ++i) dx.col(free[i]) = dx_dof_.segment<3>(3 * i);
+  }
   return st;
 }
 

@@ -33,6 +33,12 @@ struct GlobalStepInput {
   const Eigen::Matrix3Xd& g;     // the primal residual per particle (read with primal_residual = keep)
   const Vector& b;               // −h = −(C + α̃λ)
   Projection projection;         // of the element matrices (full): clamp | abs | none (exact)
+  // step = newton only: the per-element choice (overrides `projection`; harness/sim/hessian_projection.hpp),
+  // and the particles whose y the step holds (contact's active bounds, harness/sim/plane_bounds.hpp).
+  const ElementProjection* elements = nullptr;
+  const std::vector<int>* held = nullptr;
+  // step = newton: `state` came from elements()->evaluate(x): its tet SVDs are reused in the fill.
+  bool evaluated = false;
 };
 
 class GlobalStep {
@@ -53,6 +59,9 @@ class GlobalStep {
                     Eigen::Matrix3Xd& dx);
   // Seconds filling K in the last primal setup.
   double primal_fill_time() const { return primal_ ? primal_->fill_time() : 0; }
+  // The element matrices of the last prepare() (geometric_stiffness = diagonal | full), or null.
+  const ElementHessians* elements() const { return elements_ ? &*elements_ : nullptr; }
+  ElementHessians* elements() { return elements_ ? &*elements_ : nullptr; }
 
  private:
   void dual_step(const GlobalStepInput& in, const Vector& dlambda, Eigen::Matrix3Xd& dx);
@@ -68,6 +77,7 @@ class GlobalStep {
   Eigen::Matrix3Xd kd_;                   // K̃_d per particle and axis (diagonal)
   std::optional<ElementHessians> elements_;  // diagonal, full
   Vector minv_dof_, g_dof_, dx_dof_, rhs_;  // the primal form's per free DOF
+  std::vector<int> held_dofs_;              // K's rows of the held y coordinates
   TopLeftBlock top_;
   Eigen::Matrix3Xd work_;
 };

@@ -1,9 +1,8 @@
 #include "newton.hpp"
 
-#include "residual_energy.hpp"
-
 #include "../../core/reduce.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -38,34 +37,29 @@ double energy_gradient_norm(const Problem& prob, const DualSystem& ds, const Con
   return std::sqrt(particle_dot(prob, g, g)) / (h * h);
 }
 
-EnergySearch armijo_on_energy(const Problem& prob, const DualSystem& ds, const Eigen::Matrix3Xd& x,
-                              const Eigen::Matrix3Xd& dx, const Eigen::Matrix3Xd& x_pred,
-                              const Eigen::VectorXd& alpha_tilde, double h, double energy, double slope,
-                              double grad_norm, ConstraintState& scratch, Eigen::Matrix3Xd& x_trial) {
-  EnergySearch s;
-  s.energy = energy;
-  if (!(slope < 0)) return s;  // not a descent direction (or NaN): no step can pass the test
-  const double rounding = energy_rounding_factor * std::numeric_limits<double>::epsilon() * std::abs(energy);
-  for (double t = 1; t >= energy_search_min_step; t *= 0.5) {
-    x_trial = x + t * dx;
-    evaluate_constraints(prob, x_trial, scratch);
-    ++s.trials;
-    const double e = incremental_energy(prob, scratch, x_trial, x_pred, h);
-    s.on_gradient = -t * slope <= rounding;
-    // A NaN trial (a degenerate element) never passes either test.
-    // In the rounding regime E may not rise by more than its rounding either.
-    const bool pass = s.on_gradient
-                          ? e <= energy + rounding && energy_gradient_norm(prob, ds, scratch, x_trial, x_pred,
-                                                                           alpha_tilde, h) <= (1 - armijo_c * t) * grad_norm
-                          : e <= energy + armijo_c * t * slope;
-    if (pass) {
-      s.t = t;
-      s.accepted = true;
-      s.energy = e;
-      return s;
-    }
+double gradient_rounding_floor(const Problem& prob, const DualSystem& ds, const ConstraintState& s,
+                               const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde) {
+  const int m = prob.num_constraints(), n = prob.particles.size();
+  Eigen::VectorXd y(m);
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < m; ++j) {
+    double size = 0, grad = 0;
+    const auto ps = prob.constraint_particles(j);
+    for (int a = 0; a < 4; ++a)
+      if (ps[a] >= 0) {
+        size = std::max(size, x.col(ps[a]).cwiseAbs().maxCoeff());
+        grad += s.grad[j][a].squaredNorm();
+      }
+    y[j] = size * std::sqrt(grad) / alpha_tilde[j];
   }
-  return s;
+  Eigen::Matrix3Xd f;
+  ds.apply_abs_gradT(s, y, f);
+  const Eigen::VectorXd& w = prob.particles.w;
+  const double sum = deterministic_sum(n, [&](long p) {
+    if (!(w[p] > 0)) return 0.0;
+    return (f.col(p) + Eigen::Vector3d::Constant(x.col(p).cwiseAbs().maxCoeff() / w[p])).squaredNorm();
+  });
+  return std::numeric_limits<double>::epsilon() * std::sqrt(sum);
 }
 
 }  // namespace xb

@@ -5,7 +5,8 @@
 // g = M(x − x̃) − ∇Cᵀλ, is h²∇E, and the primal form of the KKT step with the geometric stiffness
 // M − Σλ_j∇²C_j and g kept, K Δx = Jᵀα̃⁻¹b − g with b = −h = 0, is the Newton step h²∇²E Δx = −h²∇E:
 // `step = newton` is Newton on E, projected where the element Hessians are (docs/newton.md).
-// Here: g and the Newton residual every method logs, the elimination, and the line search on E.
+// Here: g and the Newton residual every method logs, the elimination, ‖∇E‖ and its rounding floor.
+// The loop itself: newton_loop.hpp.
 #pragma once
 
 #include "../../problems/dual_system.hpp"
@@ -15,6 +16,10 @@
 
 namespace xb {
 
+// Newton evaluates the constraints without tet ARAP's gradient cut at rest (problems/constraints.hpp):
+// C∇C, the gradient of ½C², is smooth there.
+constexpr double newton_rest_epsilon = 0;
+
 // g = M(x − x̃) − ∇Cᵀλ per particle, zero columns at pins.
 void primal_residual_vector(const Problem& prob, const DualSystem& ds, const ConstraintState& s,
                             const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const Eigen::VectorXd& lambda,
@@ -23,28 +28,13 @@ void primal_residual_vector(const Problem& prob, const DualSystem& ds, const Con
 // λ = −α̃⁻¹C (every α̃ > 0): the multipliers of x, with which g = h²∇E.
 void eliminate_multipliers(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde, Eigen::VectorXd& lambda);
 
-constexpr double armijo_c = 1e-4;             // sufficient decrease: E(x + tΔx) ≤ E(x) + c t ∇E·Δx
-constexpr double energy_search_min_step = 1e-9;  // below it the search has failed (30 halvings)
-// When the predicted decrease |t ∇E·Δx| is below this multiple of the rounding of E, E cannot tell
-// the trial from x: the test is then on the gradient, ‖∇E(x + tΔx)‖ ≤ (1 − c t)‖∇E(x)‖, with E not
-// above E(x) by more than that rounding.
-constexpr double energy_rounding_factor = 1e3;
-
-struct EnergySearch {
-  double t = 0;          // the step taken (0: failed, x stays)
-  int trials = 0;        // energy (and gradient) evaluations spent
-  bool accepted = false;
-  bool on_gradient = false;  // the last test was the gradient's (rounding regime)
-  double energy = 0;     // E at x + tΔx (or at x if failed)
-};
-
-// Backtracking on E along dx from x (t = 1, 1/2, …): slope = ∇E(x)·dx must be < 0 (else it fails
-// at once, no trial); `energy` = E(x), `grad_norm` = ‖∇E(x)‖. Does not change x. Trials are not
-// projected onto colliders (the stepper does that after the step, as for the other steps).
-EnergySearch armijo_on_energy(const Problem& prob, const DualSystem& ds, const Eigen::Matrix3Xd& x,
-                              const Eigen::Matrix3Xd& dx, const Eigen::Matrix3Xd& x_pred,
-                              const Eigen::VectorXd& alpha_tilde, double h, double energy, double slope,
-                              double grad_norm, ConstraintState& scratch, Eigen::Matrix3Xd& x_trial);
+// A bound on the rounding error of the computed h²∇E = M(x − x̃) + Jᵀα̃⁻¹C at x, in the units of
+// ‖g‖: C_j is computed from coordinates of size X_j (the largest |x| of its particles), so it
+// carries an error of about ε·X_j·‖∇C_j‖, which α̃_j⁻¹∇C_j carries into the gradient; with the
+// inertia's ε·m_p|x_p|, per particle ε(m_p|x_p| + Σ_j |∇_pC_j|·X_j‖∇C_j‖/α̃_j), and its 2-norm over
+// the free particles. Below it ‖∇E‖ is noise: the stop reason rounding_floor (stop_reason.hpp).
+double gradient_rounding_floor(const Problem& prob, const DualSystem& ds, const ConstraintState& s,
+                               const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde);
 
 // ‖∇E(x)‖ from the constraint state at x: ‖M(x − x̃) + ∇Cᵀα̃⁻¹C‖/h² over free particles.
 double energy_gradient_norm(const Problem& prob, const DualSystem& ds, const ConstraintState& s,

@@ -1,6 +1,7 @@
 #include "reference.hpp"
 
 #include "newton.hpp"
+#include "newton_loop.hpp"
 #include "residual_energy.hpp"
 
 #include "../../core/error.hpp"
@@ -23,11 +24,11 @@ std::string resolve_reference_method(const std::string& requested, const Eigen::
 
 std::string ReferenceSolver::description() const {
   if (method_ == "newton")
-    return "newton: Newton's method on E(x) (the backward-Euler solution of the substep), cholmod on the primal "
-           "form with the full geometric stiffness (element Hessians clamped until |grad E| < 1e-2 of its first "
-           "value, then exact while they give a descent direction), Armijo backtracking on E, from x~, until "
-           "|grad E| <= 1e-10 of its value at x~ or the line search fails, at most 100 iterations; the iterate "
-           "with the smallest |grad E| is the reference";
+    return std::string("newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's "
+                       "Newton loop, cholmod on the primal form with the full geometric stiffness (xpbd.hessian_projection = ") +
+           projection + "), robust Armijo backtracking on E, the ground planes as bounds (projected Newton), from x~, "
+           "until |grad E| (free) <= 1e-10 of its value at x~ or at its rounding floor, at most 100 iterations; the "
+           "iterate with the smallest |grad E| is the reference";
   return "xpbd: cholmod (global direct solve of A dlambda = -(C + alpha~ lambda)), omega = 1, from the substep's "
          "predicted state x~ with lambda = 0, recomputed every substep from the run's own state; stops at a dual "
          "residual of 1e-10 relative or when it stops improving (no 1% gain in 5 iterations), at most 100 "
@@ -52,6 +53,12 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
   q.linear.forcing = "fixed";
   q.linear.stop_norm = "primal";  // CHOLMOD's one solve, no refinement rounds
   newton_.emplace(prob_, ds_, "cholmod", q, alpha_tilde_);
+  NewtonSettings s;
+  s.rtol = target_relative;
+  s.atol = 0;
+  s.max_iterations = max_iterations;
+  s.projection = projection;
+  loop_.emplace(prob_, ds_, *newton_, alpha_tilde_, h_, s);
 }
 
 ReferenceSolution ReferenceSolver::solve(const Eigen::Matrix3Xd& x_pred) {
@@ -68,60 +75,21 @@ ReferenceSolution ReferenceSolver::solve(const Eigen::Matrix3Xd& x_pred) {
 }
 
 ReferenceSolution ReferenceSolver::solve_newton(const Eigen::Matrix3Xd& x_pred) {
-  Eigen::Matrix3Xd x = x_pred, dx, g, x_trial;
-  Eigen::VectorXd lambda, b, dlambda;
-  ConstraintState state, scratch;
   ReferenceSolution out;
   out.x = x_pred;
-  double g0 = 0, best = INFINITY;
-  const double h2 = h_ * h_;
-  for (int it = 0;; ++it) {
-    evaluate_constraints(prob_, x, state);
-    eliminate_multipliers(state, alpha_tilde_, lambda);
-    b = -(state.C + alpha_tilde_.cwiseProduct(lambda));
-    primal_residual_vector(prob_, ds_, state, x, x_pred, lambda, g);
-    const double gn = std::sqrt(particle_dot(prob_, g, g));  // h²‖∇E‖
-    if (it == 0) g0 = gn;
-    if (!std::isfinite(gn) || !x.allFinite()) {
-      out.status = "failed";
-      break;
-    }
-    if (gn < best) {
-      best = gn;
-      out.x = x;
-      out.dual_residual = b.norm();
-      out.relative_energy_gradient = g0 > 0 ? gn / g0 : 0;
-    }
-    if (gn <= target_relative * g0 || gn == 0) {
-      out.status = "converged";
-      break;
-    }
-    if (it >= max_iterations) {
-      out.status = "max_iterations";
-      break;
-    }
-    Projection proj = gn < 1e-2 * g0 ? Projection::none : Projection::clamp;
-    for (;;) {  // the exact Hessian while it gives a descent direction, else clamped
-      const GlobalStepInput in{state, lambda, x, g, b, proj};
-      newton_->prepare(in);
-      const LinearStats st = newton_->solve(in, first_setup_ ? SetupKind::Structure : SetupKind::Values,
-                                            SetupContext{0, 0, it}, dlambda, dx);
-      first_setup_ = false;
-      ++out.iterations;
-      const bool descent = st.status != LinearStatus::breakdown && dx.allFinite() && particle_dot(prob_, g, dx) < 0;
-      if (descent || proj == Projection::clamp) break;
-      proj = Projection::clamp;
-    }
-    const double energy = incremental_energy(prob_, state, x, x_pred, h_);
-    const EnergySearch s = armijo_on_energy(prob_, ds_, x, dx, x_pred, alpha_tilde_, h_, energy,
-                                            particle_dot(prob_, g, dx) / h2, gn / h2, scratch, x_trial);
-    if (!s.accepted) {
-      out.status = "stagnated";  // no step lowers E: the rounding floor (or a solver that fails)
-      break;
-    }
-    x += s.t * dx;
-    project_onto_planes(prob_, x);
-  }
+  double best = INFINITY;
+  NewtonHooks hooks;
+  hooks.on_iterate = [&](const NewtonIterate& v) {  // the iterate with the smallest ‖∇E‖ is the reference
+    if (!(v.gradient < best)) return;
+    best = v.gradient;
+    out.x = v.x;
+    out.dual_residual = (v.state.C + alpha_tilde_.cwiseProduct(v.lambda)).norm();
+    out.relative_energy_gradient = v.gradient0 > 0 ? v.gradient / v.gradient0 : 0;
+  };
+  Eigen::Matrix3Xd x;
+  const NewtonOutcome o = loop_->minimise(x, x_pred, hooks);
+  out.iterations = o.iterations;
+  out.status = stop_reason_name(o.reason);
   return out;
 }
 

@@ -1,18 +1,19 @@
 // The reference solution of one substep, for error-against-run-time plots (reference.method):
 //  - newton (the default where every α̃ > 0): the solution of the time step itself, the minimiser of
-//    the incremental potential E (harness/sim/newton.hpp) — Newton's method on E with CHOLMOD on the
-//    primal form with the full geometric stiffness (xpbd.hessian_projection = adaptive: clamped
-//    until ‖∇E‖ < 1e-2 of its first value, then exact while it descends), an Armijo line search,
-//    from x̃, until ‖∇E‖ ≤ 1e-10 of its value at x̃ or the search fails (the rounding floor), at most
-//    100 iterations; the iterate with the smallest ‖∇E‖ is the reference.
+//    the incremental potential E (harness/sim/newton.hpp) over the ground planes' bounds — the
+//    stepper's own Newton loop (harness/sim/newton_loop.hpp) with CHOLMOD on the primal form
+//    (projection `projection` below), from x̃, until ‖∇E‖ (the free gradient) ≤ 1e-10 of its value
+//    at x̃ or at its rounding floor, at most 100 iterations; the iterate with the smallest ‖∇E‖ is
+//    the reference.
 //  - xpbd (the default where some constraint is rigid, α̃ = 0): XPBD's own fixed point — CHOLMOD on
 //    A Δλ = −(C + α̃λ), full step ω = 1, from x̃ with λ = 0, until the dual residual falls to 1e-10 of
 //    its first value or stops improving (no 1% gain over 5 iterations), at most 100 iterations;
 //    the iterate with the smallest dual residual is the reference.
-// Both apply the stepper's colliders after each step.
+// xpbd applies the stepper's colliders after each step; newton has them as bounds of the minimisation.
 #pragma once
 
 #include "global_step.hpp"
+#include "newton_loop.hpp"
 
 #include "../../problems/dual_system.hpp"
 #include "../params.hpp"
@@ -31,7 +32,10 @@ struct ReferenceSolution {
   double relative_dual_residual = 0;   // over its value at x̃
   double relative_energy_gradient = -1;  // ‖∇E‖ over its value at x̃ (−1 where some α̃ = 0)
   int iterations = 0;                  // direct solves done
-  std::string status;                  // converged | stagnated | max_iterations | failed
+  // newton: the loop's stop reason (converged | rounding_floor | max_iterations | line_search_failed |
+  // solver_failed | not_finite | diverged; the first two are a solution); xpbd: converged |
+  // stagnated | max_iterations | failed.
+  std::string status;
 };
 
 class ReferenceSolver {
@@ -39,6 +43,8 @@ class ReferenceSolver {
   static constexpr double target_relative = 1e-10;
   static constexpr int max_iterations = 100;
   static constexpr int stagnation_window = 5;
+  // newton: the projection strategy of its loop (harness/sim/hessian_projection.hpp).
+  static constexpr const char* projection = "progressive";
 
   // `prob` and `alpha_tilde` must outlive the solver; only the problem's topology, masses and
   // colliders are used. Throws xb::Error for reference.method = newton with a rigid constraint.
@@ -60,6 +66,7 @@ class ReferenceSolver {
   std::unique_ptr<LinearSolver> direct_;  // xpbd
   Params newton_params_;
   std::optional<GlobalStep> newton_;      // newton
+  std::optional<NewtonLoop> loop_;        // newton: the stepper's Newton loop on newton_
   bool first_setup_ = true;
 };
 

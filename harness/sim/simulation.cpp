@@ -35,6 +35,7 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
     global_.emplace(prob_, ds_, method, p, alpha_tilde_);
     res_.form_used = global_->form();
     active_ = &global_->solver();
+    if (newton_) newton_loop_.emplace(prob_, ds_, *global_, alpha_tilde_, h_, NewtonSettings::from(p));
   }
   lambda_.resize(prob_.num_constraints());
 }
@@ -57,8 +58,9 @@ void Simulation::check_combination(const std::string& method) const {
   if (newton_ && p_.geometric_stiffness != "full")
     throw Error("step=newton needs xpbd.geometric_stiffness=full (with " + p_.geometric_stiffness +
                 " its K lacks the constraints' Hessians: Gauss-Newton on E, not Newton); --profile newton sets it");
-  if (p_.hessian_projection == "adaptive" && !newton_)
-    throw Error("xpbd.hessian_projection=adaptive needs step=newton (it switches on |grad E|)");
+  if (p_.hessian_projection != "clamp" && p_.hessian_projection != "abs" && !newton_)
+    throw Error("xpbd.hessian_projection=" + p_.hessian_projection +
+                " needs step=newton (a strategy of Newton on E; XPBD's full geometric stiffness takes clamp or abs)");
   if (newton_)
     for (long j = 0; j < alpha_tilde_.size(); ++j)
       if (!(alpha_tilde_[j] > 0))
@@ -124,69 +126,83 @@ void Simulation::substep(int frame, int sub) {
     if (rs.relative_energy_gradient >= 0) res_.log.reference_relative_energy_gradient.push_back(rs.relative_energy_gradient);
     res_.log.reference_iterations.push_back(rs.iterations);
     res_.log.reference_status.push_back(rs.status);
-    excluded_ += ref_clock.seconds();
+    res_.log.reference_time.push_back(ref_clock.seconds());
+    excluded_ += res_.log.reference_time.back();
   }
   ++res_.substeps_total;
-  bool converged = false, search_failed = false;
+  if (newton_) {
+    newton_substep(frame, sub);
+  } else {
+    xpbd_substep(frame, sub);
+  }
+  res_.reference_time += excluded_;
+  if (stop_) return;
+  project_onto_planes(prob_, P.x);
+  P.v = (P.x - x_old_) / h_;
+  if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
+}
+
+// XPBD's outer loop (Algorithm 4), every method but step = newton.
+void Simulation::xpbd_substep(int frame, int sub) {
+  Particles& P = prob_.particles;
+  bool converged = false;
   LastStep last;
-  const std::string residual_name = newton_ ? "|grad E|" : "dual residual";
   for (int it = 0;; ++it) {
     frame_ = frame;
     iteration_ = it;
     phase_ = "the constraint evaluation";
     const Residuals r = log_state(frame, sub, it, last);
     if (opt_.on_iteration)
-      opt_.on_iteration({frame, first_frame_, p_.frames, sub, p_.substeps, it, p_.max_iterations,
-                        newton_ ? (stop0_ > 0 ? r.stop / stop0_ : 0) : (r0_ > 0 ? r.dual / r0_ : 0)});
+      opt_.on_iteration({frame, first_frame_, p_.frames, sub, p_.substeps, it, p_.max_iterations, r0_ > 0 ? r.dual / r0_ : 0});
     const std::string where = " at frame " + std::to_string(frame) + ", iteration " + std::to_string(it);
     if (!std::isfinite(r.dual) || !std::isfinite(r.stop) || !P.x.allFinite()) {
-      fail("nan", "non-finite positions or " + residual_name + where);
+      fail("nan", "non-finite positions or dual residual" + where);
       break;
     }
-    // Under newton the runaway test reads ‖∇E‖ (its dual residual is 0 by construction).
-    const double grown = newton_ ? r.stop : r.dual, first = newton_ ? stop0_ : r0_;
-    if (grown > divergence_factor * first && grown > p_.atol) {
-      fail("diverged", residual_name + " grew by more than 1e8 over its first value" + where);
+    if (r.dual > divergence_factor * r0_ && r.dual > p_.atol) {
+      fail("diverged", "dual residual grew by more than 1e8 over its first value" + where);
       break;
     }
-    if (r.stop <= p_.rtol * stop0_ || r.stop <= p_.atol) {
+    if (r.stop <= p_.rtol * r0_ || r.stop <= p_.atol) {
       converged = true;
       break;
     }
     if (it >= p_.max_iterations) break;
     if (over_budget(excluded_)) break;
     Timer step_clock;
-    // the forcing rule reads the dual residual (Newton: ‖∇E‖, its own outer residual)
-    const StepEnd end = step(frame, sub, it, newton_ ? r.stop : r.dual, last);
-    search_failed = end == StepEnd::search_failed;
-    if (end != StepEnd::ok) break;
+    if (step(frame, sub, it, r.dual, last) != StepEnd::ok) break;
     project_onto_planes(prob_, P.x);
     last.time = step_clock.seconds();
     ++res_.outer_iterations;
   }
-  res_.reference_time += excluded_;
-  if (stop_) return;
-  if (converged)
+  if (!stop_) end_substep(converged ? "converged" : "max_iterations");
+}
+
+void Simulation::end_substep(const std::string& status) {
+  res_.log.substep_status.push_back(status);
+  if (status == "converged") {
     ++res_.substeps_converged;
-  else if (search_failed)
+  } else if (status == "rounding_floor") {
+    ++rounding_floor_;
+  } else if (status == "line_search_failed") {
     ++search_failures_;
-  else
-    any_max_iterations_ = true;
-  project_onto_planes(prob_, P.x);
-  P.v = (P.x - x_old_) / h_;
-  if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
+  } else {
+    ++max_iteration_substeps_;
+  }
 }
 
 void Simulation::finish() {
   if (res_.status == "ok" && search_failures_ > 0) {
     res_.status = "line_search_failed";
     res_.message = std::to_string(search_failures_) + " of " + std::to_string(res_.substeps_total) +
-                   " substeps ended on a failed line search on E (no step of 1, 1/2, ..., 1e-9 passed the Armijo test)";
-  } else if (res_.status == "ok" && any_max_iterations_) {
+                   " substeps ended on a failed line search on E (no step of 1, 1/2, ..., 1e-9 passed it, with |grad E| "
+                   "above its rounding floor)";
+  } else if (res_.status == "ok" && max_iteration_substeps_ > 0) {
     res_.status = "max_iterations";
-    res_.message = std::to_string(res_.substeps_total - res_.substeps_converged) + " of " +
-                   std::to_string(res_.substeps_total) + " substeps stopped at max_iterations";
+    res_.message = std::to_string(max_iteration_substeps_) + " of " + std::to_string(res_.substeps_total) +
+                   " substeps stopped at max_iterations";
   }
+  reference_verdict();
   res_.wall_time = run_clock_.seconds() - res_.reference_time;
   if (active_) {
     res_.stats = active_->statistics();
@@ -210,7 +226,10 @@ void Simulation::finish() {
     res_.stats["primal_rows"] = global_->primal()->system().rows();
     res_.stats["primal_nonzeros"] = static_cast<double>(global_->primal()->system().K().nonZeros());
   }
-  if (newton_) res_.stats["line_search_failures"] = search_failures_;
+  if (newton_) {
+    res_.stats["line_search_failures"] = search_failures_;
+    res_.stats["substeps_rounding_floor"] = rounding_floor_;
+  }
   res_.stats["particles"] = prob_.particles.size();
   res_.final_positions = prob_.particles.x;
 }

@@ -5,6 +5,7 @@
 
 #include "global_step.hpp"
 #include "forcing.hpp"
+#include "newton_loop.hpp"
 #include "reference.hpp"
 #include "run_options.hpp"
 #include "stability.hpp"
@@ -30,35 +31,35 @@ class Simulation {
   RunResult run();
 
  private:
-  // What the previous step left for the next log entry.
-  struct LastStep {
-    LinearStats linear;
-    double time = 0;
-    double fill = 0;    // s filling A or K (global methods)
-    double length = 0;  // step length (global methods)
-    double tolerance = 0;  // the linear solve's relative tolerance (global methods)
-    int trials = 0;        // line-search trials (step = line_search | newton)
-    bool exact = false;    // the step used the exact element Hessians (step = newton, adaptive)
-    std::string action;
-  };
+  // What the previous step left for the next log entry (newton_loop.hpp).
+  using LastStep = StepRecord;
   // The residuals of one evaluation: the true dual one, the authors', and the stop test's (the
-  // dual or the authors' residual, or ‖∇E‖ under step = newton).
+  // dual or the authors' residual).
   struct Residuals {
     double dual, authors, stop;
   };
-  enum class StepEnd { ok, stop, search_failed };
+  // One log entry's values (what log_state evaluates, or a Newton iterate shows).
+  struct Entry {
+    double dual, authors, primal, energy;
+  };
+  enum class StepEnd { ok, stop };
   void substep(int frame, int sub);
   // Past RunOptions::time_budget (less `excluded` s of this substep's reference): fail("timeout").
   bool over_budget(double excluded);
-  // Logs the state at iteration `it`; returns the residuals.
+  // The outer loop of step = newton: the one Newton loop (newton_loop.hpp) with the stepper's hooks.
+  void newton_substep(int frame, int sub);
+  void xpbd_substep(int frame, int sub);
+  // Logs the state at iteration `it` (XPBD's methods: evaluates it); returns the residuals.
   Residuals log_state(int frame, int sub, int it, const LastStep& last);
+  void log_entry(int frame, int sub, int it, const Entry& e, const LastStep& last);
   void log_linear(const LastStep& last, int it);
   // λ += Δλ, x += (ω or the line search's t)·Δx by Params::step; returns the step length.
   double apply_global_step(LastStep& last);
+  // Ends the substep: the count of its status and `substep_status`.
+  void end_substep(const std::string& status);
   // The method step from the state just evaluated (whose stop metric is `residual`).
   StepEnd step(int frame, int sub, int it, double residual, LastStep& last);
   LinearStats global_solve(int frame, int sub, int it, LastStep& last);
-  Projection projection(int it) const;
   void check_combination(const std::string& method) const;
   void fail(const std::string& status, const std::string& msg) {
     res_.status = status;
@@ -66,6 +67,8 @@ class Simulation {
     stop_ = true;
   }
   void finish();
+  // A run whose reference did not converge says so in its status and message (docs/newton.md).
+  void reference_verdict();
 
   const Params& p_;
   const std::string& method_;
@@ -78,6 +81,7 @@ class Simulation {
   Eigen::VectorXd alpha_tilde_;
   bool newton_;  // step = newton
   std::optional<GlobalStep> global_;
+  std::optional<NewtonLoop> newton_loop_;  // step = newton
   std::optional<LocalMethod> local_;
   LinearSolver* active_ = nullptr;
   std::optional<ReferenceSolver> reference_;
@@ -92,8 +96,10 @@ class Simulation {
   Eigen::VectorXd c_authors_;  // the C of the authors' logged residual (C(x̃) local, C(x_{k−1}) global)
   ConstraintState state_, trial_state_;
   Eigen::Matrix3Xd x_trial_;
-  bool first_setup_ = true, stop_ = false, any_max_iterations_ = false;
+  bool first_setup_ = true, stop_ = false;
+  int max_iteration_substeps_ = 0;
   int search_failures_ = 0;  // substeps ended by a failed line search on E
+  int rounding_floor_ = 0;   // substeps ended at the rounding floor of ‖∇E‖
   // Where the run is, for an out-of-memory message (std::bad_alloc says nothing).
   std::string phase_ = "the set-up of the run";
   int frame_ = 0, iteration_ = 0;

@@ -14,50 +14,53 @@ Simulation::Residuals Simulation::log_state(int frame, int sub, int it, const La
   if (it > 0 && !local_) c_authors_ = state_.C;  // global: C(x_{k−1}), before it is re-evaluated
   evaluate_constraints(prob_, P.x, state_);
   if (it == 0) c_authors_ = state_.C;  // C(x̃); local methods keep it for the whole substep
-  if (newton_) eliminate_multipliers(state_, alpha_tilde_, lambda_);  // h = 0, g = h²∇E
   b_ = -(state_.C + alpha_tilde_.cwiseProduct(lambda_));
   const double dual = b_.norm();
   const double authors = (c_authors_ + alpha_tilde_.cwiseProduct(lambda_)).norm();
   primal_residual_vector(prob_, ds_, state_, P.x, x_pred_, lambda_, g_);
   const double primal = std::sqrt(particle_dot(prob_, g_, g_));
-  const double newton = std::hypot(primal, dual);
   energy_ = incremental_energy(prob_, state_, P.x, x_pred_, h_);
-  const double stop = newton_ ? primal / (h_ * h_) : p_.residual_metric == "authors" ? authors : dual;
   if (it == 0) {
-    r0_ = dual;
-    stop0_ = newton_ ? stop : dual;  // the authors' residual equals the true one at iteration 0
     // The scale of the relative Newton residual: ‖h²∇E(x̃)‖ = ‖Jᵀα̃⁻¹C(x̃)‖, the same for every method
     // (where every α̃ > 0; else the Newton residual at x̃, ‖C(x̃)‖).
-    newton0_ = newton_ ? primal
-               : (alpha_tilde_.array() > 0).all()
+    newton0_ = (alpha_tilde_.array() > 0).all()
                    ? energy_gradient_norm(prob_, ds_, state_, P.x, x_pred_, alpha_tilde_, h_) * h_ * h_
-                   : newton;
+                   : std::hypot(primal, dual);
   }
+  log_entry(frame, sub, it, {dual, authors, primal, energy_}, last);
+  return {dual, authors, p_.residual_metric == "authors" ? authors : dual};
+}
+
+// One entry of the log; at it = 0 the substep's scales (r0_: the dual residual's; newton0_ is set
+// by the caller).
+void Simulation::log_entry(int frame, int sub, int it, const Entry& e, const LastStep& last) {
+  const Particles& P = prob_.particles;
+  if (it == 0) r0_ = e.dual;
+  const double newton = std::hypot(e.primal, e.dual);
   IterationLog& L = res_.log;
   L.frame.push_back(frame);
   L.substep.push_back(sub);
   L.iteration.push_back(it);
-  L.dual_residual.push_back(dual);
-  L.relative_dual_residual.push_back(r0_ > 0 ? dual / r0_ : 0);
-  L.authors_dual_residual.push_back(authors);
-  L.authors_relative_dual_residual.push_back(r0_ > 0 ? authors / r0_ : 0);
-  L.primal_residual.push_back(primal);
+  L.dual_residual.push_back(e.dual);
+  L.relative_dual_residual.push_back(r0_ > 0 ? e.dual / r0_ : 0);
+  L.authors_dual_residual.push_back(e.authors);
+  L.authors_relative_dual_residual.push_back(r0_ > 0 ? e.authors / r0_ : 0);
+  L.primal_residual.push_back(e.primal);
   L.newton_residual.push_back(newton);
   L.relative_newton_residual.push_back(newton0_ > 0 ? newton / newton0_ : 0);
-  L.energy.push_back(energy_);
+  L.energy.push_back(e.energy);
   if (reference_) {
     Timer err_clock;
-    const double e = mass_norm_distance(prob_, P.x, x_ref_);
+    const double d = mass_norm_distance(prob_, P.x, x_ref_);
     // A substep whose reference does not move (x_ref = x̃) has no scale: absolute error.
-    L.position_error.push_back(ref_scale_ > 0 ? e / ref_scale_ : e);
+    L.position_error.push_back(ref_scale_ > 0 ? d / ref_scale_ : d);
     excluded_ += err_clock.seconds();
   }
   L.wall_time.push_back(sub_clock_.seconds() - excluded_);
   log_linear(last, it);
-  res_.final_dual_residual = dual;
-  res_.relative_dual_residual = r0_ > 0 ? dual / r0_ : 0;
-  res_.stats["final_authors_dual_residual"] = authors;
-  return {dual, authors, stop};
+  res_.final_dual_residual = e.dual;
+  res_.relative_dual_residual = r0_ > 0 ? e.dual / r0_ : 0;
+  res_.stats["final_authors_dual_residual"] = e.authors;
 }
 
 void Simulation::log_linear(const LastStep& last, int it) {
@@ -70,6 +73,7 @@ void Simulation::log_linear(const LastStep& last, int it) {
   L.step_length.push_back(s.length);
   L.line_search_trials.push_back(s.trials);
   L.exact_hessian.push_back(s.exact ? 1 : 0);
+  L.projected_elements.push_back(s.projected);
   L.linear_iterations.push_back(s.linear.iterations);
   L.linear_setup_time.push_back(s.linear.setup_time);
   L.linear_solve_time.push_back(s.linear.solve_time);
@@ -82,18 +86,9 @@ void Simulation::log_linear(const LastStep& last, int it) {
   L.linear_history_offset.push_back(static_cast<long long>(L.linear_history_residual.size()));
 }
 
-// adaptive: clamp until ‖∇E‖ < exact_hessian_below of its first value, then the exact Hessian.
-Projection Simulation::projection(int it) const {
-  if (p_.hessian_projection == "abs") return Projection::abs;
-  if (p_.hessian_projection == "adaptive" && it > 0 && res_.log.relative_newton_residual.back() < p_.exact_hessian_below)
-    return Projection::none;
-  return Projection::clamp;
-}
-
 Simulation::StepEnd Simulation::step(int frame, int sub, int it, double residual, LastStep& last) {
   Particles& P = prob_.particles;
   last.trials = 0;
-  last.exact = false;
   if (local_) {
     local_->sweep(P.x, lambda_, alpha_tilde_, state_);
     last.linear = LinearStats{};
@@ -111,51 +106,33 @@ Simulation::StepEnd Simulation::step(int frame, int sub, int it, double residual
     return StepEnd::stop;
   }
   last.length = apply_global_step(last);
-  return newton_ && last.length == 0 ? StepEnd::search_failed : StepEnd::ok;
+  return StepEnd::ok;
 }
 
-// Fills, sets up and solves the step; under newton with the exact Hessian, a step that is not a
-// descent direction (or a solver that cannot take the indefinite K) is solved again, clamped.
+// Fills, sets up and solves the step.
 LinearStats Simulation::global_solve(int frame, int sub, int it, LastStep& last) {
   Particles& P = prob_.particles;
-  Projection proj = projection(it);
-  for (;;) {
-    const GlobalStepInput in{state_, lambda_, P.x, g_, b_, proj};
-    phase_ = "the fill of the top-left block and A";
-    last.fill = global_->prepare(in);
-    if (opt_.on_system) {
-      if (global_->form() == "primal") ds_.fill(state_, alpha_tilde_);  // capture needs A too
-      if (opt_.on_system(SystemView{frame, sub, it, ds_.A(), b_, state_, alpha_tilde_, P.x})) {
-        stop_ = true;
-        res_.message = "stopped by capture";
-        return {};
-      }
+  const GlobalStepInput in{state_, lambda_, P.x, g_, b_, parse_projection(p_.hessian_projection, "xpbd.hessian_projection")};
+  phase_ = "the fill of the top-left block and A";
+  last.fill = global_->prepare(in);
+  if (opt_.on_system) {
+    if (global_->form() == "primal") ds_.fill(state_, alpha_tilde_);  // capture needs A too
+    if (opt_.on_system(SystemView{frame, sub, it, ds_.A(), b_, state_, alpha_tilde_, P.x})) {
+      stop_ = true;
+      res_.message = "stopped by capture";
+      return {};
     }
-    const SetupKind kind = first_setup_ ? SetupKind::Structure : SetupKind::Values;
-    first_setup_ = false;
-    phase_ = "the setup and solve of " + method_ + (global_->form() == "primal" ? " (primal form, K's fill included)" : "");
-    LinearStats st = global_->solve(in, kind, SetupContext{frame, sub, it}, dlambda_, dx_);
-    if (global_->form() == "primal") last.fill = global_->primal_fill_time();
-    if (proj != Projection::none) return st;
-    if (st.status != LinearStatus::breakdown && dx_.allFinite() && particle_dot(prob_, g_, dx_) < 0) {
-      last.exact = true;
-      return st;
-    }
-    proj = Projection::clamp;
   }
+  const SetupKind kind = first_setup_ ? SetupKind::Structure : SetupKind::Values;
+  first_setup_ = false;
+  phase_ = "the setup and solve of " + method_ + (global_->form() == "primal" ? " (primal form, K's fill included)" : "");
+  LinearStats st = global_->solve(in, kind, SetupContext{frame, sub, it}, dlambda_, dx_);
+  if (global_->form() == "primal") last.fill = global_->primal_fill_time();
+  return st;
 }
 
 double Simulation::apply_global_step(LastStep& last) {
   Particles& P = prob_.particles;
-  if (newton_) {  // Armijo on E along Δx; λ follows x at the next evaluation
-    const double slope = particle_dot(prob_, g_, dx_) / (h_ * h_);
-    const double grad_norm = res_.log.primal_residual.back() / (h_ * h_);  // g = h²∇E
-    const EnergySearch s = armijo_on_energy(prob_, ds_, P.x, dx_, x_pred_, alpha_tilde_, h_, energy_, slope, grad_norm,
-                                            trial_state_, x_trial_);
-    last.trials = s.trials;
-    if (s.accepted) P.x += s.t * dx_;
-    return s.t;
-  }
   if (p_.step == "line_search") {
     lambda_ += dlambda_;
     const double current = (state_.C + alpha_tilde_.cwiseProduct(lambda_)).norm();  // C(x) with the new λ
