@@ -35,6 +35,8 @@ EXCLUDED = {
     "setup_time_total": "s, measured (mgpbd's statistics)",
     "refresh_time_total": "s, measured (mgpbd's statistics)",
     "reference_time": "s, measured (--reference)",
+    "reference/time": "s per substep, measured (--reference)",
+    "hessian_time": "s per iteration, measured (the element Hessians under Newton)",
     "setup_time": "s, measured (solve)",
     "solve_time": "s, measured (solve)",
     "time": "s since the solve began, per iteration, measured (solve)",
