@@ -15,8 +15,9 @@
 namespace xb {
 
 // Indices per chunk: large enough that the chunk sums cost nothing against the loop (a 270K-row
-// vector has 66 chunks), small enough that 2–16 threads get balanced work from 10⁴ rows up.
-constexpr long reduce_chunk = 4096;
+// vector has 264 chunks), small enough that 2–16 threads get balanced work from a few thousand
+// rows up (spmv_dot's row blocks move to chunk boundaries: at most 512 rows off balance).
+constexpr long reduce_chunk = 1024;
 
 inline long reduce_chunks(long n) { return n <= 0 ? 0 : (n + reduce_chunk - 1) / reduce_chunk; }
 

@@ -34,7 +34,7 @@ double chunked_by_hand(const std::vector<double>& v) {
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 TEST(DeterministicSum, SameBitsForAnyThreadCountAndEqualToItsDefinition) {
-  for (long n : {0L, 1L, 4095L, 4096L, 4097L, 100000L, 270199L}) {
+  for (long n : {0L, 1L, 1023L, 1024L, 1025L, 4097L, 100000L, 270199L}) {
     const std::vector<double> v = random_terms(n);
     const double expected = chunked_by_hand(v);
     const int saved = omp_get_max_threads();

@@ -276,3 +276,35 @@ TEST(NewtonLoop, AnUnconvergedReferenceIsTheRunsStatus) {
   EXPECT_GT(r.log.reference_time[0], 0);
   EXPECT_LE(r.log.reference_time[0], r.reference_time);
 }
+
+// progressive's τ (docs/newton.md): 1 at a substep's start, a decade up after each step the model
+// predicted well (up to 1e3: every element exact), unchanged after a poor one; a failed try is
+// retried at 0.1, and one at 0.1 with every element clamped; the next substep starts again at 1.
+TEST(ProjectionStrategy, ProgressiveTauFollowsTheModelAndTheFailures) {
+  Params p = newton_params("twist_bar");
+  p.resolution = 2;
+  const Problem prob = build_problem(p);
+  ProjectionStrategy s(prob, "progressive", 1e-2);
+  s.begin_substep();
+  auto tau = [&](int it) { return s.first(it, 1).tolerance; };
+  EXPECT_EQ(tau(0), 1);
+  EXPECT_EQ(s.first(0, 1).base, Projection::clamp);
+  s.after_step(1.0, 1.0);
+  EXPECT_EQ(tau(1), 10);
+  s.after_step(0.5, 1.0);  // a poor step leaves τ
+  EXPECT_EQ(tau(2), 10);
+  ElementProjection more, last;
+  ASSERT_TRUE(s.next(s.first(3, 1), more));  // τ = 10 failed: the retry at 0.1
+  EXPECT_EQ(more.base, Projection::clamp);
+  EXPECT_EQ(more.tolerance, 0.1);
+  ASSERT_TRUE(s.next(more, last));  // 0.1 failed too: every element clamped
+  EXPECT_EQ(last.tolerance, 0);
+  EXPECT_FALSE(s.next(last, more));  // the clamp failed: nothing left
+  s.after_step(1.0, 1.0);
+  EXPECT_EQ(tau(4), 0.1);
+  for (int k = 0; k < 5; ++k) s.after_step(1.0, 1.0);
+  EXPECT_EQ(tau(5), 1e3);
+  EXPECT_EQ(s.first(5, 1).base, Projection::none);  // exact everywhere
+  s.begin_substep();
+  EXPECT_EQ(tau(0), 1);
+}
