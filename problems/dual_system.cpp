@@ -141,28 +141,26 @@ void DualSystem::fill_values(const ConstraintState& s, const Eigen::VectorXd& al
   }
 }
 
-void DualSystem::apply_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const {
+// One particle per thread (a gather): no two threads write one output.
+template <class Op>
+void DualSystem::gather_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out, Op op) const {
   const int n = prob_.particles.size();
   out.resize(3, n);
 #pragma omp parallel for schedule(static)
   for (int p = 0; p < n; ++p) {
     Eigen::Vector3d acc = Eigen::Vector3d::Zero();
     for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k)
-      acc += s.grad[inc_[k].constraint][inc_[k].slot] * y[inc_[k].constraint];
+      acc += op(s.grad[inc_[k].constraint][inc_[k].slot]) * y[inc_[k].constraint];
     out.col(p) = acc;
   }
 }
 
+void DualSystem::apply_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const {
+  gather_gradT(s, y, out, [](const Eigen::Vector3d& g) { return g; });
+}
+
 void DualSystem::apply_abs_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const {
-  const int n = prob_.particles.size();
-  out.resize(3, n);
-#pragma omp parallel for schedule(static)
-  for (int p = 0; p < n; ++p) {
-    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
-    for (int k = inc_start_[p]; k < inc_start_[p + 1]; ++k)
-      acc += s.grad[inc_[k].constraint][inc_[k].slot].cwiseAbs() * y[inc_[k].constraint];
-    out.col(p) = acc;
-  }
+  gather_gradT(s, y, out, [](const Eigen::Vector3d& g) { return Eigen::Vector3d(g.cwiseAbs()); });
 }
 
 void DualSystem::apply_minv_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out) const {

@@ -57,6 +57,9 @@ class DualSystem {
   // A's values with the product of particle p's gradients ga, gb weighted by dot(p, ga, gb).
   template <class Dot>
   void fill_values(const ConstraintState& s, const Eigen::VectorXd& alpha_tilde, Dot&& dot);
+  // out = Σ op(∇C)ᵀ y per particle (apply_gradT, apply_abs_gradT).
+  template <class Op>
+  void gather_gradT(const ConstraintState& s, const Eigen::VectorXd& y, Eigen::Matrix3Xd& out, Op op) const;
 
   const Problem& prob_;
   SparseMatrix A_;
