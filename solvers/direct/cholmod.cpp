@@ -32,6 +32,9 @@ class CholmodSolver final : public LinearSolver {
         natural_(p.linear.stop_norm == "energy") {
     cholmod_start(&c_);
     c_.quick_return_if_not_posdef = 1;
+    // CHOLMOD's own printing off: its status becomes this solver's message (a breakdown on an
+    // indefinite K, which Newton's safeguard retries, printed a warning line per try).
+    c_.print = 0;
   }
   ~CholmodSolver() override {
     if (L_) cholmod_free_factor(&L_, &c_);
