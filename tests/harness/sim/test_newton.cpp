@@ -11,6 +11,7 @@
 #include "harness/sim/simulation.hpp"
 #include "core/error.hpp"
 #include "problems/scene.hpp"
+#include "harness/sim/sim_test_support.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,18 +19,10 @@
 
 using namespace xb;
 
-namespace {
-Params scene_params(const std::string& scene) {
-  Params p;
-  load_scene_file(std::string(XB_SOURCE_DIR) + "/problems/scenes/" + scene + ".toml", p);
-  return p;
-}
+using xb::test::newton_params;
+using xb::test::scene_params;
 
-Params newton_params(const std::string& scene) {
-  Params p = scene_params(scene);
-  apply_profile("newton", p);
-  return p;
-}
+namespace {
 
 // h²∇E at x (all particles' dofs, 0 at pins).
 Eigen::VectorXd scaled_gradient(const Problem& prob, const DualSystem& ds, const Eigen::Matrix3Xd& x,

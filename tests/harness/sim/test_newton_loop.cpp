@@ -9,12 +9,14 @@
 #include "harness/sim/residual_energy.hpp"
 #include "harness/sim/simulation.hpp"
 #include "problems/scene.hpp"
+#include "harness/sim/sim_test_support.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 using namespace xb;
+using xb::test::newton_params;
 
 namespace {
 // Eigen's dense LDLᵀ as a LinearSolver: the exact step on any symmetric K, indefinite included
@@ -44,13 +46,6 @@ struct DenseLdltRegistration {
                       [](const SolverSettings&) { return std::make_unique<DenseLdlt>(); });
   }
 };
-
-Params newton_params(const std::string& scene) {
-  Params p;
-  load_scene_file(std::string(XB_SOURCE_DIR) + "/problems/scenes/" + scene + ".toml", p);
-  apply_profile("newton", p);
-  return p;
-}
 
 // h²∇E at x, all particles' dofs (0 at pins).
 Eigen::VectorXd gradient(const Problem& prob, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred,
