@@ -39,7 +39,7 @@ struct StepperSettings {
   // eigenvalues to 0) | abs (to their absolute value) | adaptive (step = newton: clamp until ‖∇E‖ falls
   // below exact_hessian_below of its first value, then the exact Hessian while it gives a descent
   // direction, clamp again for a step where it does not).
-  // on_demand, progressive and trust_region are strategies of step = newton (harness/sim/hessian_projection.hpp).
+  // on_demand, progressive and rho_switch are strategies of step = newton (harness/sim/hessian_projection.hpp).
   std::string hessian_projection = "clamp";
   double exact_hessian_below = 1e-2;
   // step = newton's line search on E (harness/sim/energy_line_search.hpp): robust_armijo | armijo.

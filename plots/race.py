@@ -148,9 +148,9 @@ def draw_scene(plt, sc, out):
                 ser = rules.series(e["run"])
                 if oo != o or ser is None:
                     continue
-                ok, _ = xbruns.reference_verdict(e["run"])
+                ok, why = xbruns.reference_trusted(e["run"], min(sc.thresholds))
                 ax.semilogy(ser[0], np.maximum(ser[1], 1e-300), "-" if ok else ":", color=colours[m], marker=".", ms=3,
-                            lw=1.4, label=tag(e) + ("" if ok else " (reference unconverged)"))
+                            lw=1.4, label=tag(e) + ("" if ok else f" ({why.split(' (')[0].split(':')[0]})"))
             for t in sc.thresholds:
                 ax.axhline(t, color="black", lw=0.8, ls=":")
             ax.set_ylim(min(sc.thresholds) * 1e-3, 2.0)  # a converged run's 1e-16 would flatten the race
@@ -189,8 +189,19 @@ def status_text(run):
 
 
 def reference_text(run):
+    """The reference's verdict and certificate: "converged, certified: error ≤ 3e-09 (trusted to
+    3e-07)", or why not."""
     ok, why = xbruns.reference_verdict(run)
-    return "converged" if ok else why
+    if not ok:
+        return why
+    d = run.get("data", {})
+    cert, est = d.get("reference/certified"), d.get("reference/error_estimate")
+    if cert is None or est is None or len(cert) == 0:
+        return "converged, no certificate recorded"
+    if not int(cert[0]):
+        note = d.get("reference/certificate_note")
+        return "converged, not certified" + (f": {note[0]}" if note is not None and len(note) and str(note[0]) else "")
+    return f"converged, certified: error ≤ {float(est[0]):.2g} (trusted to {100 * float(est[0]):.2g})"
 
 
 def lagged_note(e):
@@ -261,7 +272,9 @@ RULES = ("Each entry (an outer method with a linear method and a forcing rule; E
          "backward-Euler solution of the substep, ‖x − x_ref‖_M / ‖x_ref − x̃‖_M. `time to e`: the wall time within "
          "the frame (the reference's time is not in it) at which the error first is at most e; — (v): never, v the "
          "smallest error the run reached; — (reference unconverged …): the reference did not converge in that substep, "
-         "so there is nothing true to time against. Rules: plots/race_rules.py; spec: figures/race/race.toml.")
+         "so there is nothing true to time against; — (reference not fine enough): the reference's own error "
+         "estimate (its certificate, results/README.md) is above e/100, so a time to e would be a time to the "
+         "reference's own error. Rules: plots/race_rules.py; spec: figures/race/race.toml.")
 
 
 def summary(scenes):

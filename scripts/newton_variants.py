@@ -23,7 +23,7 @@ import h5py
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-STRATEGIES = ["clamp", "abs", "adaptive", "on_demand", "progressive", "trust_region"]
+STRATEGIES = ["clamp", "abs", "adaptive", "on_demand", "progressive", "rho_switch"]
 
 
 def cpu_seconds():

@@ -152,8 +152,18 @@ std::string reference_cell(const RunRecord& r) {
   return n == "0" ? "converged" : n + " of " + attr_cell(r, "substeps_total") + " substeps unconverged";
 }
 
+// The reference's certificate (harness/sim/certificate.hpp): the finest position-error threshold
+// every substep's reference supports (100 times its error estimate), or how many are uncertified.
+std::string certificate_cell(const RunRecord& r) {
+  if (!r.attrs.count("reference_substeps_uncertified")) return "-";
+  const std::string n = attr_cell(r, "reference_substeps_uncertified");
+  if (n != "0") return "uncertified in " + n + " of " + attr_cell(r, "substeps_total") + " substeps";
+  return "error <= " + attr_cell(r, "reference_error_estimate") + ", trusted to " +
+         attr_cell(r, "reference_certified_threshold");
+}
+
 // The simulation table's columns: each run's own convergence measure, and with a reference the
-// position error and whether the reference converged.
+// position error, whether the reference converged and its certificate.
 std::vector<Column> simulation_columns(const std::vector<RunRecord>& runs) {
   std::vector<Column> cols;
   for (const char* k : {"scene", "solver", "form_used", "status", "outer_iterations"}) cols.push_back(attr_column(k));
@@ -161,7 +171,9 @@ std::vector<Column> simulation_columns(const std::vector<RunRecord>& runs) {
   const bool reference = std::any_of(runs.begin(), runs.end(), [](const RunRecord& r) {
     return attr_cell(r, "level") == "simulation" && r.attrs.count("reference_substeps_unconverged");
   });
-  if (reference) cols.insert(cols.end(), {attr_column("final_position_error"), {"reference", reference_cell}});
+  if (reference)
+    cols.insert(cols.end(),
+                {attr_column("final_position_error"), {"reference", reference_cell}, {"certificate", certificate_cell}});
   cols.push_back(attr_column("wall_time"));
   return cols;
 }
@@ -209,7 +221,8 @@ void print_tables(const std::vector<RunRecord>& runs) {
                 << ", or OpenMP threads spinning (wait policy not passive); rerun on a quiet machine\n";
     if (level == "simulation")
       std::cout << "measure: what each run's stop test read (|grad E| under step = newton, in N; else the dual "
-                   "residual); relative: over the same substep's first value\n";
+                   "residual); relative: over the same substep's first value; certificate: the worst bound on the "
+                   "reference's own position error and the finest position error it can judge (100 times that)\n";
     std::cout << "\n";
   }
 }

@@ -169,6 +169,42 @@ void add_convergence_attributes(RunRecord& r, const Params& p, const IterationLo
   r.attrs["final_convergence"] = last;
   r.attrs["final_relative_convergence"] = start > 0 ? last / start : 0.0;
 }
+// The reference of every substep (harness/sim/reference.hpp), its certificate and the error against
+// it (results/README.md, the reference/ group).
+void add_reference_records(RunRecord& r, const RunResult& res) {
+  const IterationLog& L = res.log;
+  r.attrs["reference_method"] = res.reference_method;
+  double worst = 0, estimate = 0, threshold = 0;
+  long long unconverged = 0, uncertified = 0;
+  for (size_t i = 0; i < L.reference_status.size(); ++i) {
+    worst = std::max(worst, L.reference_relative_dual_residual[i]);
+    if (!L.reference_success[i]) ++unconverged;
+    if (!L.reference_certified[i]) ++uncertified;
+    estimate = std::max(estimate, L.reference_error_estimate[i]);  // ∞ wins; NaN never occurs
+    threshold = std::max(threshold, L.reference_certified_threshold[i]);
+  }
+  r.attrs["reference_dual_residual"] = worst;
+  r.attrs["reference_substeps_unconverged"] = unconverged;
+  r.attrs["reference_substeps_uncertified"] = uncertified;
+  r.attrs["reference_error_estimate"] = estimate;
+  r.attrs["reference_certified_threshold"] = threshold;
+  r.attrs["reference_time"] = res.reference_time;
+  r.datasets["position_error"] = L.position_error;
+  r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
+  r.datasets["reference/iterations"] = L.reference_iterations;
+  r.datasets["reference/status"] = L.reference_status;
+  r.datasets["reference/success"] = L.reference_success;
+  r.datasets["reference/time"] = L.reference_time;
+  r.datasets["reference/energy_gradient"] = L.reference_energy_gradient;
+  r.datasets["reference/gradient_floor"] = L.reference_gradient_floor;
+  r.datasets["reference/error_scale"] = L.reference_error_scale;
+  r.datasets["reference/error_estimate"] = L.reference_error_estimate;
+  r.datasets["reference/contraction"] = L.reference_contraction;
+  r.datasets["reference/certified"] = L.reference_certified;
+  r.datasets["reference/certified_threshold"] = L.reference_certified_threshold;
+  r.datasets["reference/certificate_note"] = L.reference_certificate_note;
+  if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
+}
 }  // namespace
 
 RunRecord make_simulation_record(const std::string& name, const Params& p, const std::string& method,
@@ -199,30 +235,13 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   for (const auto& a : log_arrays)
     if (!a.global_only || global) std::visit([&](auto member) { r.datasets[a.name] = L.*member; }, a.member);
   r.datasets["substep_status"] = L.substep_status;
+  r.datasets["substep_success"] = L.substep_success;
   if (!L.relative_gradient_floor.empty()) {  // step = newton
     r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;
     r.datasets["active_bounds"] = L.active_bounds;
     r.datasets["hessian_time"] = L.hessian_time;
   }
-  if (!L.reference_status.empty()) {
-    // The reference of every substep (harness/sim/reference.hpp) and the error against it.
-    r.attrs["reference_method"] = res.reference_method;
-    double worst = 0;
-    long long unconverged = 0;
-    for (size_t i = 0; i < L.reference_status.size(); ++i) {
-      worst = std::max(worst, L.reference_relative_dual_residual[i]);
-      if (L.reference_status[i] != "converged" && L.reference_status[i] != "rounding_floor") ++unconverged;
-    }
-    r.attrs["reference_dual_residual"] = worst;
-    r.attrs["reference_substeps_unconverged"] = unconverged;
-    r.attrs["reference_time"] = res.reference_time;
-    r.datasets["position_error"] = L.position_error;
-    r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
-    r.datasets["reference/iterations"] = L.reference_iterations;
-    r.datasets["reference/status"] = L.reference_status;
-    r.datasets["reference/time"] = L.reference_time;
-    if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
-  }
+  if (!L.reference_status.empty()) add_reference_records(r, res);
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
   r.datasets["final_positions"] = pos;
   return r;

@@ -7,7 +7,9 @@
 #include "../../core/error.hpp"
 #include "../../core/reduce.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace xb {
 
@@ -35,7 +37,8 @@ std::string ReferenceSolver::description() const {
          "iterations; the best iterate is the reference";
 }
 
-ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eigen::VectorXd& alpha_tilde)
+ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eigen::VectorXd& alpha_tilde,
+                                 const ReferenceSettings& settings)
     : prob_(prob), alpha_tilde_(alpha_tilde), h_(p.dt / p.substeps),
       method_(resolve_reference_method(p.reference_method, alpha_tilde)), ds_(prob), newton_params_(p) {
   const MethodInfo* m = find_method("cholmod");
@@ -54,15 +57,23 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
   q.linear.stop_norm = "primal";  // CHOLMOD's one solve, no refinement rounds
   newton_.emplace(prob_, ds_, "cholmod", q, alpha_tilde_);
   NewtonSettings s;
-  s.rtol = target_relative;
-  s.atol = 0;
-  s.max_iterations = max_iterations;
-  s.projection = projection;
+  s.stop.rtol = settings.target_relative;
+  s.stop.atol = 0;
+  s.stop.max_iterations = settings.max_iterations;
+  s.projection = parse_projection_strategy(projection);
   loop_.emplace(prob_, ds_, *newton_, alpha_tilde_, h_, s);
+  certificate_.emplace(prob_, ds_, *newton_, alpha_tilde_, h_);
+}
+
+Certificate ReferenceSolver::certify(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred) {
+  if (!certificate_) throw Error("reference: only a newton reference has a certificate (reference.method = " + method_ + ")");
+  return certificate_->certify(x, x_pred);
 }
 
 ReferenceSolution ReferenceSolver::solve(const Eigen::Matrix3Xd& x_pred) {
   ReferenceSolution out = method_ == "newton" ? solve_newton(x_pred) : solve_xpbd(x_pred);
+  out.error_scale = position_error_scale(prob_, out.x, x_pred);
+  if (method_ == "xpbd") out.certificate_note = "an XPBD fixed point, not the minimiser of E: no certificate";
   if (method_ == "xpbd" && (alpha_tilde_.array() > 0).all()) {
     ConstraintState s0, s;
     evaluate_constraints(prob_, x_pred, s0);
@@ -74,14 +85,19 @@ ReferenceSolution ReferenceSolver::solve(const Eigen::Matrix3Xd& x_pred) {
   return out;
 }
 
+// The reference is the iterate with the smallest ‖∇E‖; its certificate reads the step that led to it.
 ReferenceSolution ReferenceSolver::solve_newton(const Eigen::Matrix3Xd& x_pred) {
   ReferenceSolution out;
   out.x = x_pred;
-  double best = INFINITY;
+  double best = INFINITY, last_step = 0, best_step = 0;
+  Eigen::Matrix3Xd previous;
   NewtonHooks hooks;
-  hooks.on_iterate = [&](const NewtonIterate& v) {  // the iterate with the smallest ‖∇E‖ is the reference
+  hooks.on_iterate = [&](const NewtonIterate& v) {
+    last_step = v.iteration > 0 ? mass_norm_distance(prob_, v.x, previous) : 0;
+    previous = v.x;
     if (!(v.gradient < best)) return;
     best = v.gradient;
+    best_step = last_step;
     out.x = v.x;
     out.dual_residual = (v.state.C + alpha_tilde_.cwiseProduct(v.lambda)).norm();
     out.relative_energy_gradient = v.gradient0 > 0 ? v.gradient / v.gradient0 : 0;
@@ -89,7 +105,19 @@ ReferenceSolution ReferenceSolver::solve_newton(const Eigen::Matrix3Xd& x_pred) 
   Eigen::Matrix3Xd x;
   const NewtonOutcome o = loop_->minimise(x, x_pred, hooks);
   out.iterations = o.iterations;
-  out.status = stop_reason_name(o.reason);
+  out.status = o.reason;
+  if (!out.x.allFinite()) {
+    out.certificate_note = "the reference is not finite";
+    return out;
+  }
+  const Certificate c = certificate_->certify(out.x, x_pred);
+  const double scale = position_error_scale(prob_, out.x, x_pred);
+  out.energy_gradient = c.gradient;
+  out.gradient_floor = c.floor;
+  out.contraction = c.contraction;
+  out.error_estimate = scale > 0 ? c.error_bound / scale : c.error_bound;
+  out.certified = c.positive_definite && std::isfinite(out.error_estimate);
+  out.certificate_note = c.note;
   return out;
 }
 
@@ -109,7 +137,7 @@ ReferenceSolution ReferenceSolver::solve_xpbd(const Eigen::Matrix3Xd& x_pred) {
     const double dual = b.norm();
     if (it == 0) r0 = dual;
     if (!std::isfinite(dual) || !x.allFinite()) {
-      out.status = "failed";
+      out.status = StopReason::not_finite;
       break;
     }
     if (dual < best) {
@@ -119,7 +147,7 @@ ReferenceSolution ReferenceSolver::solve_xpbd(const Eigen::Matrix3Xd& x_pred) {
       out.relative_dual_residual = r0 > 0 ? dual / r0 : 0;
     }
     if (dual <= target_relative * r0 || dual == 0) {
-      out.status = "converged";
+      out.status = StopReason::converged;
       break;
     }
     // Stagnation: the best value gained less than 1% over the last window of iterations.
@@ -127,11 +155,11 @@ ReferenceSolution ReferenceSolver::solve_xpbd(const Eigen::Matrix3Xd& x_pred) {
       best_at_window_start = best;
       since_gain = 0;
     } else if (++since_gain >= stagnation_window) {
-      out.status = "stagnated";
+      out.status = StopReason::stagnated;
       break;
     }
     if (it >= max_iterations) {
-      out.status = "max_iterations";
+      out.status = StopReason::max_iterations;
       break;
     }
     ds_.fill(state, alpha_tilde);
@@ -140,7 +168,7 @@ ReferenceSolution ReferenceSolver::solve_xpbd(const Eigen::Matrix3Xd& x_pred) {
     const LinearStats st = direct_->solve(b, dlambda);
     ++out.iterations;
     if (st.status == LinearStatus::breakdown || !dlambda.allFinite()) {
-      out.status = "failed";
+      out.status = StopReason::solver_failed;
       break;
     }
     lambda += dlambda;
@@ -155,6 +183,20 @@ double mass_norm_distance(const Problem& prob, const Eigen::Matrix3Xd& a, const 
   const Eigen::VectorXd& w = prob.particles.w;
   return std::sqrt(
       deterministic_sum(a.cols(), [&](long p) { return w[p] > 0 ? (a.col(p) - b.col(p)).squaredNorm() / w[p] : 0.0; }));
+}
+
+double position_error_scale(const Problem& prob, const Eigen::Matrix3Xd& x_ref, const Eigen::Matrix3Xd& x_pred) {
+  const Eigen::VectorXd& w = prob.particles.w;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  double mass = 0;
+  for (long p = 0; p < x_pred.cols(); ++p)
+    if (w[p] > 0) {
+      lo = lo.cwiseMin(x_pred.col(p));
+      hi = hi.cwiseMax(x_pred.col(p));
+      mass += 1 / w[p];
+    }
+  const double body = mass > 0 ? std::sqrt(std::numeric_limits<double>::epsilon()) * (hi - lo).norm() * std::sqrt(mass) : 0;
+  return std::max(mass_norm_distance(prob, x_ref, x_pred), body);
 }
 
 }  // namespace xb

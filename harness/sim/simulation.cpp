@@ -22,6 +22,10 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
       alpha_tilde_(scaled_compliance(prob_, h_)), newton_(p.step == "newton"), stability_(prob_, p),
       forcing_(p.linear) {
   check_combination(method);
+  criterion_.rtol = p.rtol;
+  criterion_.atol = p.atol;
+  criterion_.max_iterations = p.max_iterations;
+  if (!newton_) xpbd_projection_ = parse_projection(p.hessian_projection, "xpbd.hessian_projection");
   if (opt.reference) {
     Timer ref_clock;
     reference_.emplace(prob_, p, alpha_tilde_);
@@ -120,13 +124,10 @@ void Simulation::substep(int frame, int sub) {
   if (reference_) {
     Timer ref_clock;
     ReferenceSolution rs = reference_->solve(x_pred_);
-    x_ref_ = std::move(rs.x);
-    ref_scale_ = mass_norm_distance(prob_, x_ref_, x_pred_);
-    res_.log.reference_relative_dual_residual.push_back(rs.relative_dual_residual);
-    if (rs.relative_energy_gradient >= 0) res_.log.reference_relative_energy_gradient.push_back(rs.relative_energy_gradient);
-    res_.log.reference_iterations.push_back(rs.iterations);
-    res_.log.reference_status.push_back(rs.status);
     res_.log.reference_time.push_back(ref_clock.seconds());
+    log_reference(rs);
+    x_ref_ = std::move(rs.x);
+    ref_scale_ = rs.error_scale;
     excluded_ += res_.log.reference_time.back();
   }
   ++res_.substeps_total;
@@ -142,10 +143,11 @@ void Simulation::substep(int frame, int sub) {
   if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
 }
 
-// XPBD's outer loop (Algorithm 4), every method but step = newton.
+// XPBD's outer loop (Algorithm 4), every method but step = newton: the stop criterion on the
+// dual residual (divergence) and on the stop metric (convergence).
 void Simulation::xpbd_substep(int frame, int sub) {
   Particles& P = prob_.particles;
-  bool converged = false;
+  StopReason reason = StopReason::running;
   LastStep last;
   for (int it = 0;; ++it) {
     frame_ = frame;
@@ -159,35 +161,48 @@ void Simulation::xpbd_substep(int frame, int sub) {
       fail("nan", "non-finite positions or dual residual" + where);
       break;
     }
-    if (r.dual > divergence_factor * r0_ && r.dual > p_.atol) {
+    if (criterion_.diverged(r.dual, r0_)) {
       fail("diverged", "dual residual grew by more than 1e8 over its first value" + where);
       break;
     }
-    if (r.stop <= p_.rtol * r0_ || r.stop <= p_.atol) {
-      converged = true;
-      break;
-    }
-    if (it >= p_.max_iterations) break;
-    if (over_budget(excluded_)) break;
+    if (criterion_.converged(r.stop, r0_)) reason = StopReason::converged;
+    else if (it >= p_.max_iterations) reason = StopReason::max_iterations;
+    if (reason != StopReason::running || over_budget(excluded_)) break;
     Timer step_clock;
     if (step(frame, sub, it, r.dual, last) != StepEnd::ok) break;
     project_onto_planes(prob_, P.x);
     last.time = step_clock.seconds();
     ++res_.outer_iterations;
   }
-  if (!stop_) end_substep(converged ? "converged" : "max_iterations");
+  if (!stop_) end_substep(reason);
 }
 
-void Simulation::end_substep(const std::string& status) {
-  res_.log.substep_status.push_back(status);
-  if (status == "converged") {
-    ++res_.substeps_converged;
-  } else if (status == "rounding_floor") {
-    ++rounding_floor_;
-  } else if (status == "line_search_failed") {
-    ++search_failures_;
-  } else {
-    ++max_iteration_substeps_;
+void Simulation::log_reference(const ReferenceSolution& rs) {
+  IterationLog& L = res_.log;
+  L.reference_relative_dual_residual.push_back(rs.relative_dual_residual);
+  if (rs.relative_energy_gradient >= 0) L.reference_relative_energy_gradient.push_back(rs.relative_energy_gradient);
+  L.reference_iterations.push_back(rs.iterations);
+  L.reference_status.push_back(stop_reason_name(rs.status));
+  L.reference_success.push_back(stop_reason_success(rs.status) ? 1 : 0);
+  L.reference_energy_gradient.push_back(rs.energy_gradient);
+  L.reference_gradient_floor.push_back(rs.gradient_floor);
+  L.reference_error_scale.push_back(rs.error_scale);
+  L.reference_error_estimate.push_back(rs.error_estimate);
+  L.reference_contraction.push_back(rs.contraction);
+  L.reference_certified.push_back(rs.certified ? 1 : 0);
+  L.reference_certified_threshold.push_back(rs.certified_threshold());
+  L.reference_certificate_note.push_back(rs.certificate_note);
+}
+
+void Simulation::end_substep(StopReason reason) {
+  res_.log.substep_status.push_back(stop_reason_name(reason));
+  res_.log.substep_success.push_back(stop_reason_success(reason) ? 1 : 0);
+  switch (reason) {
+    case StopReason::converged: ++res_.substeps_converged; break;
+    case StopReason::rounding_floor: ++rounding_floor_; break;
+    case StopReason::line_search_at_floor: ++search_at_floor_; [[fallthrough]];
+    case StopReason::line_search_failed: ++search_failures_; break;
+    default: ++max_iteration_substeps_;
   }
 }
 
@@ -196,7 +211,9 @@ void Simulation::finish() {
     res_.status = "line_search_failed";
     res_.message = std::to_string(search_failures_) + " of " + std::to_string(res_.substeps_total) +
                    " substeps ended on a failed line search on E (no step of 1, 1/2, ..., 1e-9 passed it, with |grad E| "
-                   "above its rounding floor)";
+                   "above its rounding floor" +
+                   (search_at_floor_ > 0 ? "; " + std::to_string(search_at_floor_) + " of them within 1e2 of it: line_search_at_floor"
+                                         : std::string()) + ")";
   } else if (res_.status == "ok" && max_iteration_substeps_ > 0) {
     res_.status = "max_iterations";
     res_.message = std::to_string(max_iteration_substeps_) + " of " + std::to_string(res_.substeps_total) +

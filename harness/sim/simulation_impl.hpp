@@ -20,9 +20,6 @@
 
 namespace xb::detail {
 
-// Runaway: the outer residual grew this much over the substep's first one.
-constexpr double divergence_factor = 1e8;
-
 // One run: the method, its state and the log. Algorithm 4 is run() → substep() → the outer loop;
 // what is logged per evaluation is in log_state(), the method step in step().
 class Simulation {
@@ -55,8 +52,10 @@ class Simulation {
   void log_linear(const LastStep& last, int it);
   // λ += Δλ, x += (ω or the line search's t)·Δx by Params::step; returns the step length.
   double apply_global_step(LastStep& last);
-  // Ends the substep: the count of its status and `substep_status`.
-  void end_substep(const std::string& status);
+  // The substep's reference and its certificate into the log (the reference/ group).
+  void log_reference(const ReferenceSolution& rs);
+  // Ends the substep: the count of its stop reason, `substep_status` and `substep_success`.
+  void end_substep(StopReason reason);
   // The method step from the state just evaluated (whose stop metric is `residual`).
   StepEnd step(int frame, int sub, int it, double residual, LastStep& last);
   LinearStats global_solve(int frame, int sub, int it, LastStep& last);
@@ -88,7 +87,7 @@ class Simulation {
   StabilityMonitor stability_;
   ForcingRule forcing_;
   Eigen::Matrix3Xd x_pred_, x_old_, dx_, g_, x_ref_;
-  double ref_scale_ = 0;  // ‖x_ref − x̃‖_M
+  double ref_scale_ = 0;  // position_error's denominator (ReferenceSolution::error_scale)
   double excluded_ = 0;   // s of the substep spent on the reference and the error, taken off every clock
   double r0_ = 0, stop0_ = 0, newton0_ = 0;  // the substep's first dual, stop and Newton residuals
   double energy_ = 0;     // E at the state just logged
@@ -99,6 +98,9 @@ class Simulation {
   bool first_setup_ = true, stop_ = false;
   int max_iteration_substeps_ = 0;
   int search_failures_ = 0;  // substeps ended by a failed line search on E
+  int search_at_floor_ = 0;  // of them, those within 1e2 of the rounding floor (line_search_at_floor)
+  StopCriterion criterion_;  // XPBD's outer loop (Newton's is its loop's)
+  Projection xpbd_projection_ = Projection::clamp;  // xpbd.hessian_projection under XPBD (clamp | abs)
   int rounding_floor_ = 0;   // substeps ended at the rounding floor of ‖∇E‖
   // Where the run is, for an out-of-memory message (std::bad_alloc says nothing).
   std::string phase_ = "the set-up of the run";

@@ -52,7 +52,7 @@ void Simulation::log_entry(int frame, int sub, int it, const Entry& e, const Las
   if (reference_) {
     Timer err_clock;
     const double d = mass_norm_distance(prob_, P.x, x_ref_);
-    // A substep whose reference does not move (x_ref = x̃) has no scale: absolute error.
+    // The scale is positive but where no particle is free (ReferenceSolution::error_scale).
     L.position_error.push_back(ref_scale_ > 0 ? d / ref_scale_ : d);
     excluded_ += err_clock.seconds();
   }
@@ -112,7 +112,7 @@ Simulation::StepEnd Simulation::step(int frame, int sub, int it, double residual
 // Fills, sets up and solves the step.
 LinearStats Simulation::global_solve(int frame, int sub, int it, LastStep& last) {
   Particles& P = prob_.particles;
-  const GlobalStepInput in{state_, lambda_, P.x, g_, b_, parse_projection(p_.hessian_projection, "xpbd.hessian_projection")};
+  const GlobalStepInput in{state_, lambda_, P.x, g_, b_, xpbd_projection_};
   phase_ = "the fill of the top-left block and A";
   last.fill = global_->prepare(in);
   if (opt_.on_system) {

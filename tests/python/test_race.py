@@ -12,18 +12,28 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 sys.path.insert(0, os.path.join(ROOT, "plots"))
 import race  # noqa: E402
 import race_rules as rules  # noqa: E402
+import xbruns  # noqa: E402
 
 
-def fake(errors=(1.0, 0.1, 0.005, 5e-5), wall=3.0, status="ok", reference="converged", rows=100, substeps=None, **attrs):
+def fake(errors=(1.0, 0.1, 0.005, 5e-5), wall=3.0, status="ok", reference="converged", rows=100, substeps=None,
+         estimate=1e-9, **attrs):
     """A run as xbruns.load gives it: attributes and datasets. `substeps`: the substep of each entry
-    (default: one substep); `reference`: the status of each substep's reference."""
+    (default: one substep); `reference`: the status of each substep's reference (its success as the
+    harness writes it: converged or rounding_floor); `estimate`: its certificate's error estimate
+    (inf: not certified)."""
     n = len(errors)
     sub = np.zeros(n, int) if substeps is None else np.asarray(substeps)
     it = np.concatenate([np.arange(np.sum(sub == k)) for k in np.unique(sub)])
     refs = [reference] if isinstance(reference, str) else list(reference)
+    m = len(refs)
     data = {"iteration": it, "frame": np.zeros(n, int), "substep": sub, "wall_time": np.linspace(0, wall, n),
             "position_error": np.asarray(errors, float), "linear_iterations": np.full(n, 5.0),
-            "reference/status": np.array(refs), "reference/relative_energy_gradient": np.full(len(refs), 2.5e-4)}
+            "reference/status": np.array(refs), "reference/relative_energy_gradient": np.full(m, 2.5e-4),
+            "reference/success": np.array([int(r in ("converged", "rounding_floor")) for r in refs]),
+            "reference/error_estimate": np.full(m, estimate),
+            "reference/certified": np.full(m, int(math.isfinite(estimate))),
+            "reference/certified_threshold": np.full(m, 100 * estimate),
+            "reference/certificate_note": np.array(["" if math.isfinite(estimate) else "the last step did not contract"] * m)}
     return {"attrs": {"status": status, "wall_time": wall, "outer_iterations": n - 1, "rows": rows, **attrs}, "data": data}
 
 
@@ -61,6 +71,26 @@ def test_a_reference_that_did_not_converge_times_nothing():
     del plain["data"]["position_error"]
     assert rules.verdict(plain, 1e-2) == (None, rules.NO_REFERENCE)
     assert rules.verdict(failed(), 1e-2) == (None, rules.NO_DATA)
+
+
+def test_a_reference_not_fine_enough_times_no_threshold_below_100_times_its_error():
+    """A reference whose certificate bounds its own error by 1e-5 judges 1e-2 (and 1e-3) but not
+    1e-4: the race says so and times nothing there; one without a certificate judges nothing."""
+    r = fake(errors=(1.0, 1e-3, 1e-6), wall=2.0, estimate=1e-5)
+    assert rules.verdict(r, 1e-2) == (1.0, "") and rules.verdict(r, 1e-3) == (1.0, "")
+    assert rules.verdict(r, 1e-4) == (None, rules.NOT_FINE)
+    e = dict(outer="newton", linear="mgpbd", forcing="fixed", run=r)
+    assert race.cell(e, 1e-4) == "— (reference not fine enough)"
+    assert race.reference_text(r) == "converged, certified: error ≤ 1e-05 (trusted to 0.001)"
+    assert rules.best([r, fake(errors=(1.0, 1e-3, 1e-6), wall=4.0)], [1e-2, 1e-4])["attrs"]["wall_time"] == 4.0
+    bare = fake(estimate=math.inf)
+    assert rules.verdict(bare, 1e-2) == (None, rules.UNCERTIFIED)
+    assert "the last step did not contract" in race.reference_text(bare)
+    # Printing a run's error: only where every substep's reference can judge it.
+    a = {"reference_substeps_unconverged": 0, "reference_certified_threshold": 1e-3}
+    assert xbruns.error_text(2e-3, a) == "0.002"
+    assert xbruns.error_text(2e-4, a) == "reference not fine enough (it judges ≥ 0.001)"
+    assert xbruns.error_text(2e-4, {**a, "reference_substeps_unconverged": 1}) == "0.0002 (reference unconverged)"
 
 
 def test_best_reaches_the_smallest_threshold_first_then_the_next_then_the_error():
@@ -161,6 +191,6 @@ sizes = [ { label = "r2" } ]
     assert len(newton) == 3 and not any("rtol=" in c or "max_iterations=" in c for c in newton)
     assert not any("xpbd-gs" in c and "--profile" in c for c in cmds)  # a sweep runs only under XPBD
     summary = (out / "summary.md").read_text()
-    assert "| Newton | cholmod | fixed |" in summary and "converged" in summary
+    assert "| Newton | cholmod | fixed |" in summary and "converged, certified: error ≤" in summary
     assert "| XPBD | broken | fixed |" in summary and "failed (exit" in summary
     assert (out / "race_bar.png").exists() and (out / "timings.tsv").exists()
