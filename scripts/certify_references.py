@@ -10,8 +10,8 @@ many references are a solution (reference/success) and certified (the exact Hess
 positive definite, reference/certified), the worst error estimate and its substep's contraction q,
 and the finest position error the references can judge (100 × the worst estimate). Then the
 μ = 1e12 cases (heavy_rope and pendulum, variant mu1e12, --mu12-frames frames; docs/newton.md's
-Tournier table): the same columns, and what the race's rules (plots/race_rules.py) say of the
-thresholds 1e-2 and 1e-4 for the run's first substep. Then `xpbd-bench report` of every file (its
+Tournier table): the same columns, and per threshold 1e-2 and 1e-4 in how many substeps the
+reference can judge it, and what the race's rules (plots/race_rules.py) say of the run's first. Then `xpbd-bench report` of every file (its
 `certificate` column). Every command is printed with the 1-min load before it.
 """
 import argparse
@@ -55,9 +55,11 @@ def row(label, path, thresholds=()):
     cells = [label, a.get("status"), len(est), int(np.sum(d["reference/success"])), int(np.sum(d["reference/certified"])),
              f"{est[worst]:.2g}", "—" if math.isnan(q[worst]) else f"{q[worst]:.2g}",
              f"{float(a.get('reference_certified_threshold', math.inf)):.2g}"]
+    th = np.asarray(d["reference/certified_threshold"], float)
     for t in thresholds:
         secs, why = race_rules.verdict(r, t)
-        cells.append(f"{secs:.3g} s" if secs is not None else why)
+        cells.append(f"judged in {int(np.sum(th <= t))} of {len(th)} substeps; the race's (the first): "
+                     + (f"{secs:.3g} s" if secs is not None else why))
     cells.append("; ".join(notes) or "—")
     return "| " + " | ".join(str(c) for c in cells) + " |"
 

@@ -61,6 +61,7 @@ Certificate MinimiserCertificate::certify(const Eigen::Matrix3Xd& x, const Eigen
   const SparseMatrix& K = step_.fill_newton_system(in, g_dof_);
   std::string why;
   if (!factor_.factorise(K, why)) {
+    factor_.release();
     c.note = "the exact Hessian on the free set is " + why;
     return c;
   }
@@ -73,6 +74,7 @@ Certificate MinimiserCertificate::certify(const Eigen::Matrix3Xd& x, const Eigen
   evaluate_constraints(prob_, x_plus_, state_, newton_rest_epsilon);
   gradient_at(x_plus_, x_pred);
   const double chord = step_norm(g_, s_);
+  factor_.release();  // a second factor of K beside the reference's own is not kept between substeps
   if (std::isnan(c.newton_step) || std::isnan(c.rounding_step) || std::isnan(chord)) {
     c.note = "CHOLMOD's solve with the exact Hessian failed";
     return c;

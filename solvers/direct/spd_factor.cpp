@@ -53,6 +53,11 @@ bool SpdFactor::factorise(const SparseMatrix& K, std::string& why) {
   return false;
 }
 
+void SpdFactor::release() {
+  if (s_->L) cholmod_free_factor(&s_->L, &s_->c);
+  s_->ok = false;
+}
+
 bool SpdFactor::solve(const Vector& b, Vector& x) {
   if (!s_->ok) return false;
   cholmod_dense bd{};

@@ -22,6 +22,8 @@ class SpdFactor {
   bool factorise(const SparseMatrix& K, std::string& why);
   // x = K⁻¹b with the last successful factorisation; false if CHOLMOD failed.
   bool solve(const Vector& b, Vector& x);
+  // Frees the factor (its memory; the symbolic analysis too).
+  void release();
 
  private:
   struct State;
