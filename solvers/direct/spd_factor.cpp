@@ -10,6 +10,7 @@ struct SpdFactor::State {
   cholmod_common c{};
   cholmod_factor* L = nullptr;
   bool ok = false;
+  long rows = -1, nonzeros = -1;  // of the matrix L's analysis is of
 };
 
 SpdFactor::SpdFactor() : s_(std::make_unique<State>()) {
@@ -39,8 +40,12 @@ bool SpdFactor::factorise(const SparseMatrix& K, std::string& why) {
   view.sorted = 1;
   view.packed = 1;
   cholmod_common& c = s_->c;
-  if (s_->L) cholmod_free_factor(&s_->L, &c);
-  s_->L = cholmod_analyze(&view, &c);
+  if (s_->L && (s_->rows != K.rows() || s_->nonzeros != K.nonZeros())) cholmod_free_factor(&s_->L, &c);
+  if (!s_->L) {  // the analysis (ordering, supernodes) once per pattern
+    s_->L = cholmod_analyze(&view, &c);
+    s_->rows = K.rows();
+    s_->nonzeros = K.nonZeros();
+  }
   s_->ok = s_->L && cholmod_factorize(&view, s_->L, &c) && c.status == CHOLMOD_OK && s_->L->is_ll;
   if (s_->ok) return true;
   if (c.status == CHOLMOD_NOT_POSDEF && s_->L)
@@ -54,7 +59,8 @@ bool SpdFactor::factorise(const SparseMatrix& K, std::string& why) {
 }
 
 void SpdFactor::release() {
-  if (s_->L) cholmod_free_factor(&s_->L, &s_->c);
+  // Back to the symbolic factor: the numbers go, the analysis stays for the next factorise().
+  if (s_->L && !cholmod_change_factor(CHOLMOD_PATTERN, 1, 1, 1, 1, s_->L, &s_->c)) cholmod_free_factor(&s_->L, &s_->c);
   s_->ok = false;
 }
 

@@ -19,10 +19,11 @@ class SpdFactor {
   SpdFactor& operator=(const SpdFactor&) = delete;
   // Factorises K (symmetric, both triangles stored; the upper one is read). True: K is positive
   // definite. False with `why` where it is not (the column CHOLMOD stopped at) or CHOLMOD failed.
+  // The symbolic analysis is kept for the next K of the same pattern (rows and non-zeros).
   bool factorise(const SparseMatrix& K, std::string& why);
   // x = K⁻¹b with the last successful factorisation; false if CHOLMOD failed.
   bool solve(const Vector& b, Vector& x);
-  // Frees the factor (its memory; the symbolic analysis too).
+  // Frees the factor's numbers (the analysis stays).
   void release();
 
  private:
