@@ -19,29 +19,28 @@ namespace detail {
 
 Simulation::Simulation(const Problem& prob, const Params& p, const std::string& method, const RunOptions& opt)
     : p_(p), method_(method), opt_(opt), prob_(prob), ds_(prob_), h_(p.dt / p.substeps),
-      alpha_tilde_(scaled_compliance(prob_, h_)), newton_(p.step == "newton"), stability_(prob_, p),
-      forcing_(p.linear) {
+      alpha_tilde_(scaled_compliance(prob_, h_)), newton_(p.step == "newton"), m_(p.linear), stability_(prob_, p) {
   check_combination(method);
-  criterion_.rtol = p.rtol;
-  criterion_.atol = p.atol;
-  criterion_.max_iterations = p.max_iterations;
-  if (!newton_) xpbd_projection_ = parse_projection(p.hessian_projection, "xpbd.hessian_projection");
+  m_.criterion.rtol = p.rtol;
+  m_.criterion.atol = p.atol;
+  m_.criterion.max_iterations = p.max_iterations;
+  if (!newton_) m_.projection = parse_projection(p.hessian_projection, "xpbd.hessian_projection");
   if (opt.reference) {
     Timer ref_clock;
-    reference_.emplace(prob_, p, alpha_tilde_);
-    res_.reference_method = reference_->description();
+    truth_.solver.emplace(prob_, p, alpha_tilde_);
+    res_.reference_method = truth_.solver->description();
     res_.reference_time += ref_clock.seconds();
   }
   if (find_method(method)->local) {
-    local_.emplace(prob_, ds_, p.xpbd, local_kind(method));
+    m_.local.emplace(prob_, ds_, p.xpbd, local_kind(method));
     res_.form_used = "none";
   } else {
-    global_.emplace(prob_, ds_, method, p, alpha_tilde_);
-    res_.form_used = global_->form();
-    active_ = &global_->solver();
-    if (newton_) newton_loop_.emplace(prob_, ds_, *global_, alpha_tilde_, h_, NewtonSettings::from(p));
+    m_.global.emplace(prob_, ds_, method, p, alpha_tilde_);
+    res_.form_used = m_.global->form();
+    m_.active = &m_.global->solver();
+    if (newton_) m_.newton.emplace(prob_, ds_, *m_.global, alpha_tilde_, h_, NewtonSettings::from(p));
   }
-  lambda_.resize(prob_.num_constraints());
+  substep_.lambda.resize(prob_.num_constraints());
 }
 
 // The outer-method keys a method cannot take: one message naming the key (docs/newton.md).
@@ -83,15 +82,15 @@ RunResult Simulation::run() {
       prob_.particles.v = s->v;
       start = s->frame;
     }
-    first_frame_ = start;
+    where_.first_frame = start;
     for (int frame = start; frame < start + p_.frames && !stop_; ++frame) {
       for (int sub = 0; sub < p_.substeps && !stop_; ++sub) substep(frame, sub);
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
       if (!stop_ && opt_.on_state) opt_.on_state(SimState{frame + 1, prob_.particles.x, prob_.particles.v});
     }
   } catch (const std::bad_alloc&) {
-    fail("error", "out of memory in " + phase_ + " at frame " + std::to_string(frame_) + ", iteration " +
-                      std::to_string(iteration_));
+    fail("error", "out of memory in " + where_.phase + " at frame " + std::to_string(where_.frame) + ", iteration " +
+                      std::to_string(where_.iteration));
   } catch (const std::exception& e) {
     fail("error", e.what());
   }
@@ -101,7 +100,7 @@ RunResult Simulation::run() {
 
 // Checked every outer iteration and every substep, so that no count of either escapes it.
 bool Simulation::over_budget(double excluded) {
-  if (opt_.time_budget <= 0 || run_clock_.seconds() - res_.reference_time - excluded <= opt_.time_budget) return false;
+  if (opt_.time_budget <= 0 || clock_.run.seconds() - res_.reference_time - excluded <= opt_.time_budget) return false;
   char budget[32];
   std::snprintf(budget, sizeof budget, "%g", opt_.time_budget);
   fail("timeout", std::string("time budget of ") + budget + " s exceeded");
@@ -111,24 +110,24 @@ bool Simulation::over_budget(double excluded) {
 void Simulation::substep(int frame, int sub) {
   if (over_budget(0)) return;
   Particles& P = prob_.particles;
-  sub_clock_.reset();
-  x_old_ = P.x;
+  clock_.sub.reset();
+  substep_.x_old = P.x;
   for (int i = 0; i < P.size(); ++i)
     if (P.w[i] > 0) P.v.col(i) += h_ * prob_.gravity;
-  x_pred_ = P.x + h_ * P.v;
+  substep_.x_pred = P.x + h_ * P.v;
   for (int i = 0; i < P.size(); ++i)
-    if (P.w[i] == 0) x_pred_.col(i) = P.x.col(i);  // pins stay
-  P.x = x_pred_;
-  lambda_.setZero();
-  excluded_ = 0;
-  if (reference_) {
+    if (P.w[i] == 0) substep_.x_pred.col(i) = P.x.col(i);  // pins stay
+  P.x = substep_.x_pred;
+  substep_.lambda.setZero();
+  clock_.excluded = 0;
+  if (truth_.solver) {
     Timer ref_clock;
-    ReferenceSolution rs = reference_->solve(x_pred_);
+    ReferenceSolution rs = truth_.solver->solve(substep_.x_pred);
     res_.log.reference_time.push_back(ref_clock.seconds());
     log_reference(rs);
-    x_ref_ = std::move(rs.x);
-    ref_scale_ = rs.error_scale;
-    excluded_ += res_.log.reference_time.back();
+    truth_.x = std::move(rs.x);
+    truth_.scale = rs.error_scale;
+    clock_.excluded += res_.log.reference_time.back();
   }
   ++res_.substeps_total;
   if (newton_) {
@@ -136,10 +135,10 @@ void Simulation::substep(int frame, int sub) {
   } else {
     xpbd_substep(frame, sub);
   }
-  res_.reference_time += excluded_;
+  res_.reference_time += clock_.excluded;
   if (stop_) return;
   project_onto_planes(prob_, P.x);
-  P.v = (P.x - x_old_) / h_;
+  P.v = (P.x - substep_.x_old) / h_;
   if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
 }
 
@@ -150,24 +149,24 @@ void Simulation::xpbd_substep(int frame, int sub) {
   StopReason reason = StopReason::running;
   LastStep last;
   for (int it = 0;; ++it) {
-    frame_ = frame;
-    iteration_ = it;
-    phase_ = "the constraint evaluation";
+    where_.frame = frame;
+    where_.iteration = it;
+    where_.phase = "the constraint evaluation";
     const Residuals r = log_state(frame, sub, it, last);
     if (opt_.on_iteration)
-      opt_.on_iteration({frame, first_frame_, p_.frames, sub, p_.substeps, it, p_.max_iterations, r0_ > 0 ? r.dual / r0_ : 0});
+      opt_.on_iteration({frame, where_.first_frame, p_.frames, sub, p_.substeps, it, p_.max_iterations, substep_.r0 > 0 ? r.dual / substep_.r0 : 0});
     const std::string where = " at frame " + std::to_string(frame) + ", iteration " + std::to_string(it);
     if (!std::isfinite(r.dual) || !std::isfinite(r.stop) || !P.x.allFinite()) {
       fail("nan", "non-finite positions or dual residual" + where);
       break;
     }
-    if (criterion_.diverged(r.dual, r0_)) {
+    if (m_.criterion.diverged(r.dual, substep_.r0)) {
       fail("diverged", "dual residual grew by more than 1e8 over its first value" + where);
       break;
     }
-    if (criterion_.converged(r.stop, r0_)) reason = StopReason::converged;
+    if (m_.criterion.converged(r.stop, substep_.r0)) reason = StopReason::converged;
     else if (it >= p_.max_iterations) reason = StopReason::max_iterations;
-    if (reason != StopReason::running || over_budget(excluded_)) break;
+    if (reason != StopReason::running || over_budget(clock_.excluded)) break;
     Timer step_clock;
     if (step(frame, sub, it, r.dual, last) != StepEnd::ok) break;
     project_onto_planes(prob_, P.x);
@@ -199,34 +198,34 @@ void Simulation::end_substep(StopReason reason) {
   res_.log.substep_success.push_back(stop_reason_success(reason) ? 1 : 0);
   switch (reason) {
     case StopReason::converged: ++res_.substeps_converged; break;
-    case StopReason::rounding_floor: ++rounding_floor_; break;
-    case StopReason::line_search_at_floor: ++search_at_floor_; [[fallthrough]];
-    case StopReason::line_search_failed: ++search_failures_; break;
-    default: ++max_iteration_substeps_;
+    case StopReason::rounding_floor: ++ends_.rounding_floor; break;
+    case StopReason::line_search_at_floor: ++ends_.search_at_floor; [[fallthrough]];
+    case StopReason::line_search_failed: ++ends_.search_failures; break;
+    default: ++ends_.max_iterations;
   }
 }
 
 void Simulation::finish() {
-  if (res_.status == "ok" && search_failures_ > 0) {
+  if (res_.status == "ok" && ends_.search_failures > 0) {
     res_.status = "line_search_failed";
-    res_.message = std::to_string(search_failures_) + " of " + std::to_string(res_.substeps_total) +
+    res_.message = std::to_string(ends_.search_failures) + " of " + std::to_string(res_.substeps_total) +
                    " substeps ended on a failed line search on E (no step of 1, 1/2, ..., 1e-9 passed it, with |grad E| "
                    "above its rounding floor" +
-                   (search_at_floor_ > 0 ? "; " + std::to_string(search_at_floor_) + " of them within 1e2 of it: line_search_at_floor"
+                   (ends_.search_at_floor > 0 ? "; " + std::to_string(ends_.search_at_floor) + " of them within 1e2 of it: line_search_at_floor"
                                          : std::string()) + ")";
-  } else if (res_.status == "ok" && max_iteration_substeps_ > 0) {
+  } else if (res_.status == "ok" && ends_.max_iterations > 0) {
     res_.status = "max_iterations";
-    res_.message = std::to_string(max_iteration_substeps_) + " of " + std::to_string(res_.substeps_total) +
+    res_.message = std::to_string(ends_.max_iterations) + " of " + std::to_string(res_.substeps_total) +
                    " substeps stopped at max_iterations";
   }
   reference_verdict();
-  res_.wall_time = run_clock_.seconds() - res_.reference_time;
-  if (active_) {
-    res_.stats = active_->statistics();
-    res_.arrays = active_->array_statistics();
+  res_.wall_time = clock_.run.seconds() - res_.reference_time;
+  if (m_.active) {
+    res_.stats = m_.active->statistics();
+    res_.arrays = m_.active->array_statistics();
   }
-  if (local_)
-    for (const auto& [key, value] : local_->statistics()) res_.stats[key] = value;
+  if (m_.local)
+    for (const auto& [key, value] : m_.local->statistics()) res_.stats[key] = value;
   // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
   // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
   if (stability_.has_tets()) res_.arrays["inverted_tets"] = stability_.inverted_tets();
@@ -239,13 +238,13 @@ void Simulation::finish() {
   }
   res_.stats["rows"] = prob_.num_constraints();
   res_.stats["nonzeros"] = static_cast<double>(ds_.A().nonZeros());
-  if (global_ && global_->primal()) {
-    res_.stats["primal_rows"] = global_->primal()->system().rows();
-    res_.stats["primal_nonzeros"] = static_cast<double>(global_->primal()->system().K().nonZeros());
+  if (m_.global && m_.global->primal()) {
+    res_.stats["primal_rows"] = m_.global->primal()->system().rows();
+    res_.stats["primal_nonzeros"] = static_cast<double>(m_.global->primal()->system().K().nonZeros());
   }
   if (newton_) {
-    res_.stats["line_search_failures"] = search_failures_;
-    res_.stats["substeps_rounding_floor"] = rounding_floor_;
+    res_.stats["line_search_failures"] = ends_.search_failures;
+    res_.stats["substeps_rounding_floor"] = ends_.rounding_floor;
   }
   res_.stats["particles"] = prob_.particles.size();
   res_.final_positions = prob_.particles.x;

@@ -69,43 +69,69 @@ class Simulation {
   // A run whose reference did not converge says so in its status and message (docs/newton.md).
   void reference_verdict();
 
+  // What the run is: its settings, its copy of the problem, the substep's h and α̃.
   const Params& p_;
   const std::string& method_;
   const RunOptions& opt_;
-  RunResult res_;
-  Timer run_clock_, sub_clock_;
+  // The clocks, started first (the run's covers its set-up): the run's, the substep's, and the
+  // reference's share of the substep.
+  struct Clocks {
+    Timer run, sub;
+    double excluded = 0;  // s of the substep spent on the reference and the error, taken off every clock
+  } clock_;
   Problem prob_;
   DualSystem ds_;
   double h_;
   Eigen::VectorXd alpha_tilde_;
   bool newton_;  // step = newton
-  std::optional<GlobalStep> global_;
-  std::optional<NewtonLoop> newton_loop_;  // step = newton
-  std::optional<LocalMethod> local_;
-  LinearSolver* active_ = nullptr;
-  std::optional<ReferenceSolver> reference_;
+
+  // The method: the outer loop's step (global linear step, Newton loop or local sweep) and its rules.
+  struct Method {
+    explicit Method(const LinearSettings& linear) : forcing(linear) {}
+    std::optional<GlobalStep> global;
+    std::optional<NewtonLoop> newton;  // step = newton: the one Newton loop on `global`
+    std::optional<LocalMethod> local;
+    LinearSolver* active = nullptr;    // the global step's solver (its statistics)
+    ForcingRule forcing;
+    StopCriterion criterion;           // XPBD's outer loop (Newton's is its loop's)
+    Projection projection = Projection::clamp;  // xpbd.hessian_projection under XPBD (clamp | abs)
+    bool first_setup = true;
+  } m_;
+
+  // The truth: each substep's reference and what the position error is measured against.
+  struct Truth {
+    std::optional<ReferenceSolver> solver;
+    Eigen::Matrix3Xd x;  // x_ref
+    double scale = 0;    // position_error's denominator (ReferenceSolution::error_scale)
+  } truth_;
+
+  // The substep: x̃, its start, and XPBD's outer-loop state (Newton's is its loop's).
+  struct Substep {
+    Eigen::Matrix3Xd x_pred, x_old;
+    Eigen::VectorXd lambda, b, dlambda;
+    Eigen::Matrix3Xd dx, g, x_trial;
+    ConstraintState state, trial_state;
+    Eigen::VectorXd c_authors;     // the C of the authors' logged residual (C(x̃) local, C(x_{k−1}) global)
+    double r0 = 0, newton0 = 0;    // the substep's first dual and Newton residuals
+    double energy = 0;             // E at the state just logged
+  } substep_;
+
+  // The outcome: the result and log, how the substeps ended, the stability checks, the stop flag.
+  RunResult res_;
+  struct Ends {
+    int max_iterations = 0;
+    int search_failures = 0;  // substeps ended by a failed line search on E
+    int search_at_floor = 0;  // of them, those within 1e2 of the rounding floor (line_search_at_floor)
+    int rounding_floor = 0;   // substeps ended at the rounding floor of ‖∇E‖
+  } ends_;
   StabilityMonitor stability_;
-  ForcingRule forcing_;
-  Eigen::Matrix3Xd x_pred_, x_old_, dx_, g_, x_ref_;
-  double ref_scale_ = 0;  // position_error's denominator (ReferenceSolution::error_scale)
-  double excluded_ = 0;   // s of the substep spent on the reference and the error, taken off every clock
-  double r0_ = 0, stop0_ = 0, newton0_ = 0;  // the substep's first dual, stop and Newton residuals
-  double energy_ = 0;     // E at the state just logged
-  Eigen::VectorXd lambda_, b_, dlambda_;
-  Eigen::VectorXd c_authors_;  // the C of the authors' logged residual (C(x̃) local, C(x_{k−1}) global)
-  ConstraintState state_, trial_state_;
-  Eigen::Matrix3Xd x_trial_;
-  bool first_setup_ = true, stop_ = false;
-  int max_iteration_substeps_ = 0;
-  int search_failures_ = 0;  // substeps ended by a failed line search on E
-  int search_at_floor_ = 0;  // of them, those within 1e2 of the rounding floor (line_search_at_floor)
-  StopCriterion criterion_;  // XPBD's outer loop (Newton's is its loop's)
-  Projection xpbd_projection_ = Projection::clamp;  // xpbd.hessian_projection under XPBD (clamp | abs)
-  int rounding_floor_ = 0;   // substeps ended at the rounding floor of ‖∇E‖
+  bool stop_ = false;
+
   // Where the run is, for an out-of-memory message (std::bad_alloc says nothing).
-  std::string phase_ = "the set-up of the run";
-  int frame_ = 0, iteration_ = 0;
-  int first_frame_ = 0;
+  struct Where {
+    std::string phase = "the set-up of the run";
+    int frame = 0, iteration = 0, first_frame = 0;
+  } where_;
 };
 
 }  // namespace xb::detail
