@@ -1,5 +1,5 @@
 // The bytes each pass of one V-cycle (and of CG's product with K) reads and writes, against the
-// triad's bandwidth measured in the same process: what docs/amg_scaling.md's per-pass table
+// triad's bandwidth measured in the same process: what docs/mgpbd.md's per-pass table
 // reports. Bytes are the compulsory traffic of each kernel as it runs: values, the index arrays
 // it reads (one column node per block, the row pointers per node), the vectors read once, and
 // each vector written counted twice (its write-allocate read, as the triad counts it). Gathers
