@@ -99,7 +99,13 @@ def main():
             t.row([f"squash {mesh}", s] + row)
     if args.data:
         pages.write_data(args.data, "newton", "Newton on E: the tables", "Every projection strategy on every stock scene",
-                         stamp, [t.data()], __doc__.split("\n\n")[1].split("\n--data")[0], order=1)
+                         stamp, [t.data()], description(), order=1)
+
+
+def description():
+    """The paragraph of this file's usage text that says what is run and what each column is."""
+    text = next(p for p in __doc__.split("\n\n") if p.startswith("For each scene"))
+    return " ".join(text.split("\n--data")[0].split())
 
 
 if __name__ == "__main__":

@@ -154,3 +154,14 @@ def test_newton_variants_data(tmp_path):
     assert r.returncode == 0, r.stderr
     d = pages.read_data(str(out))
     assert d["page"] == "newton" and d["tables"][0]["rows"][0][:3] == ["pendulum", "clamp", "ok"]
+    assert d["text"].startswith("For each scene")
+
+
+def test_another_generator_keeps_the_stamp_beside_its_data(tmp_path):
+    s = pages.stamp("python3 figures/race.py", triad=False)
+    pages.write_stamp(str(tmp_path / "stamp.json"), s)
+    assert pages.read_stamp(str(tmp_path / "stamp.json")) == s
+    head = pages.marker("plots/race.py", "DATA")
+    sys.path.insert(0, os.path.join(ROOT, "tests"))
+    import test_doc_budget
+    assert head.startswith(test_doc_budget.GENERATED_PREFIX) and "plots/race.py" in head

@@ -138,7 +138,7 @@ def main():
     stamp = pages.stamp("python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench --threads "
                         f"{args.threads}", microbench=os.path.join(os.path.dirname(args.binary), "xb_microbench")) \
         if args.data else None
-    table = pages.Table(["case", "command", "runs", "records compared per thread count", "thread counts",
+    table = pages.Table(["case", "command", "runs", "attributes and datasets compared", "thread counts",
                          "differing runs"], out=io.StringIO())
     threads = [int(t) for t in args.threads.split(",")]
     only = set(filter(None, args.only.split(",")))
