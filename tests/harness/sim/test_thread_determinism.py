@@ -8,7 +8,7 @@ The set: every in-house method (xpbd-jacobi, xpbd-authors, xpbd-gs, cg, jacobi-p
 tet scene (squash) and on the cloth, the global ones in both forms; mgpbd with the float and the
 double V-cycle over two frames (setups and refreshes); a Newton run with --reference; a captured
 system solved in both forms. Sizes are chosen so that every vector spans several of
-core/reduce.hpp's chunks of 4096 indices and every parallel loop runs on all threads (above
+core/reduce.hpp's chunks of 1,024 indices and every parallel loop runs on all threads (above
 kMinParallelRows = 2048).
 
 usage: python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench [--threads 1,2,3,4]
