@@ -136,7 +136,7 @@ def main():
     ap.add_argument("--data", default="", help="write the comparison as stamped data for plots/pages.py")
     args = ap.parse_args()
     stamp = pages.stamp("python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench --threads "
-                        f"{args.threads}", microbench=os.path.join(os.path.dirname(args.binary), "xb_microbench")) \
+                        f"{args.threads} --data {args.data}", microbench=os.path.join(os.path.dirname(args.binary), "xb_microbench")) \
         if args.data else None
     table = pages.Table(["case", "command", "runs", "attributes and datasets compared", "thread counts",
                          "differing runs"], out=io.StringIO())
