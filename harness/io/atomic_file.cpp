@@ -24,6 +24,7 @@ namespace xb {
 
 namespace {
 void fsync_folder(const std::string& path) {
+  io_fault::durable_step();
   const fs::path parent = fs::path(path).parent_path();
   const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY);
   if (fd >= 0) {
@@ -31,6 +32,9 @@ void fsync_folder(const std::string& path) {
     ::close(fd);
   }
 }
+
+// A file system that has no hard links (some FUSE and SMB mounts): link(2) fails with one of these.
+bool no_hard_links(int err) { return err == EPERM || err == ENOTSUP || err == EOPNOTSUPP || err == ENOSYS || err == EMLINK; }
 }  // namespace
 
 std::string errno_text(int err) {
@@ -167,6 +171,7 @@ void TmpFile::finish() {
   if (!pending_.empty()) put(pending_.data(), pending_.size());
   pending_.clear();
   if (const int e = io_fault::next_write()) fail("flush " + shown_ + " to disk", e);
+  io_fault::durable_step();
   if (::fsync(fd_) != 0) {
     const int e = errno;
     fail("flush " + shown_ + " to disk", e);
@@ -180,10 +185,29 @@ void TmpFile::finish() {
 void TmpFile::commit() {
   finish();
   int e = io_fault::next_rename();
+  io_fault::durable_step();
   if (e == 0 && ::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
   if (e) fail("write " + shown_ + " (rename into place)", e);
   committed_ = true;
   fsync_folder(path_);
+}
+
+bool TmpFile::commit_new() {
+  finish();
+  int e = io_fault::next_rename();
+  io_fault::durable_step();
+  if (e == 0 && ::link(tmp_.c_str(), path_.c_str()) != 0) e = errno;
+  if (e == EEXIST) return false;
+  if (no_hard_links(e)) {  // the caller holds the file's lock: a rename cannot meet another writer's file
+    e = 0;
+    if (::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
+    else committed_ = true;
+  }
+  if (e) fail("write " + shown_ + " (link into place)", e);
+  if (!committed_) ::unlink(tmp_.c_str());  // the file is PATH now; a kill before this leaves a stale temporary
+  committed_ = true;
+  fsync_folder(path_);
+  return true;
 }
 
 void make_parent(const std::string& path) {
