@@ -279,3 +279,19 @@ TEST(RunStore, RepairSaysWhatItFound) {
   EXPECT_EQ(read_runs(r, false, &skipped).size(), 2u);
   EXPECT_TRUE(skipped.empty());
 }
+
+// A writer rewrites the index only now and then (ten times its cost apart); close() and the
+// destructor bring it up to date with every run it added.
+TEST(RunStore, AWritersRunsAreAllInTheIndexOnceItCloses) {
+  TempDir d;
+  const std::string r = (d.path / "r.h5").string(), s = (d.path / "s.h5").string();
+  {
+    ResultsWriter w(r, false);
+    for (int i = 0; i < 30; ++i) w.add({run_of("x", 1)});
+    w.close();
+    EXPECT_EQ(linked_runs(r, "/").size(), 30u);
+    ResultsWriter v(s, false);
+    for (int i = 0; i < 30; ++i) v.add({run_of("x", 1)});
+  }
+  EXPECT_EQ(linked_runs(s, "/").size(), 30u);
+}
