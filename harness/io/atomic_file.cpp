@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -197,7 +198,11 @@ bool TmpFile::commit_new() {
   int e = io_fault::next_rename();
   io_fault::durable_step();
   if (e == 0 && ::link(tmp_.c_str(), path_.c_str()) != 0) e = errno;
-  if (e == EEXIST) return false;
+  if (e == EEXIST) {  // over NFS a retried link that had succeeded says EEXIST: PATH is then this file
+    struct stat a {}, b {};
+    if (::stat(tmp_.c_str(), &a) != 0 || ::stat(path_.c_str(), &b) != 0 || a.st_ino != b.st_ino || a.st_dev != b.st_dev) return false;
+    e = 0;
+  }
   if (no_hard_links(e)) {  // the caller holds the file's lock: a rename cannot meet another writer's file
     e = 0;
     if (::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
