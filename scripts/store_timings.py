@@ -16,6 +16,7 @@ not evidence). --quick: 1,000-run files and a 500-run sweep, to check that the s
 import argparse
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -43,12 +44,22 @@ def load():
         return float(f.read().split()[0])
 
 
-def timed(cmd):
-    t = time.perf_counter()
+CPU = {}  # command kind -> CPU seconds (user + system) of its runs: what load changes least
+
+
+def cpu_children():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def timed(cmd, kind=None):
+    t, c = time.perf_counter(), cpu_children()
     p = subprocess.run(cmd, capture_output=True, text=True, env=env())
     took = time.perf_counter() - t
     if p.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} exited {p.returncode}: {p.stderr[-1500:]}")
+    if kind:
+        CPU.setdefault(kind, []).append(cpu_children() - c)
     return took
 
 
@@ -63,8 +74,8 @@ def neighbour(binary, work, big, repeat):
     before = snapshot(big)
     into_empty, beside = [], []
     for i in range(repeat):
-        into_empty.append(timed([binary, "run"] + TINY + ["--out", os.path.join(empty, f"n{i}.h5")]))
-        beside.append(timed([binary, "run"] + TINY + ["--out", os.path.join(os.path.dirname(big), f"n{i}.h5")]))
+        into_empty.append(timed([binary, "run"] + TINY + ["--out", os.path.join(empty, f"n{i}.h5")], "into_empty"))
+        beside.append(timed([binary, "run"] + TINY + ["--out", os.path.join(os.path.dirname(big), f"n{i}.h5")], "beside_big"))
     a, b = statistics.median(into_empty), statistics.median(beside)
     untouched = snapshot(big) == before
     return dict(into_empty_s=a, beside_big_s=b, difference_s=b - a, untouched=untouched,
@@ -79,7 +90,7 @@ def sweep_overhead(binary, work, runs):
     out = os.path.join(work, f"sweep{runs}.h5")
     for p in (out, out + ".runs"):
         shutil.rmtree(p) if os.path.isdir(p) else os.path.exists(p) and os.remove(p)
-    wall = timed([binary, "sweep", spec, "--out", out, "--quiet"])
+    wall = timed([binary, "sweep", spec, "--out", out, "--quiet"], f"sweep_{runs}")
     with h5py.File(out, "r") as f:
         own = sum(float(g.attrs["wall_time"]) for g in f["runs"].values())
         n = len(f["runs"])
@@ -102,8 +113,8 @@ def append(binary, work, big, repeat):
     small = build_results_store.build(binary, 10, os.path.join(work, "ten", "r.h5"))
     into_small, into_big = [], []
     for _ in range(repeat):
-        into_small.append(timed([binary, "run"] + TINY + ["--out", small, "--append"]))
-        into_big.append(timed([binary, "run"] + TINY + ["--out", big, "--append"]))
+        into_small.append(timed([binary, "run"] + TINY + ["--out", small, "--append"], "append_10"))
+        into_big.append(timed([binary, "run"] + TINY + ["--out", big, "--append"], "append_big"))
     a, b = statistics.median(into_small), statistics.median(into_big)
     return dict(into_10_s=a, into_big_s=b, limit_s=2 * a + 0.1, met=b <= 2 * a + 0.1)
 
@@ -138,6 +149,7 @@ def main():
         if not a.work:
             shutil.rmtree(work, ignore_errors=True)
     results["load_at_end"] = load()
+    results["cpu_s_median"] = {k: statistics.median(v) for k, v in CPU.items()}
     print(json.dumps(results, indent=1))
     missed = [k for k, v in results.items() if isinstance(v, dict) and v.get("met") is False]
     print("store_timings: " + ("every limit met" if not missed else "missed: " + ", ".join(missed)))

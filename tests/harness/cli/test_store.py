@@ -241,7 +241,19 @@ def neighbour_untouched(binary, work):
     after = {p: (os.stat(p).st_mtime_ns, os.stat(p).st_size) for p in stat if os.path.exists(p)}
     if after != stat or snapshot(big) != before:
         fail(case, "the 1,000-run file changed")
-    print(f"{case}: untouched", flush=True)
+    # Not opened, not listed, not looked at: no path of it in any file call of the command.
+    said = "untouched"
+    if shutil.which("strace"):
+        log = os.path.join(folder, "strace.log")
+        p = subprocess.run(["strace", "-f", "-e", "trace=%file", "-o", log, binary, "run"] + TINY +
+                           ["--solver", "xpbd-gs", "--out", os.path.join(folder, "other.h5"), "--quiet"],
+                           capture_output=True, text=True, env=env())
+        with open(log) as fh:
+            touched = [ln for ln in fh if "big.h5" in ln]
+        if p.returncode != 0 or touched:
+            fail(case, f"exit {p.returncode}; file calls naming it: {touched[:5]}")
+        said += ", and no file call of the run names it (strace)"
+    print(f"{case}: {said}", flush=True)
 
 
 TESTS = [locks_fail, identical_sweeps, damaged_runs, stopped_writer, moved_files, neighbour_untouched]
