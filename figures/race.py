@@ -84,6 +84,17 @@ def timing(path, t0, seconds, code, load):
                      f"{os.path.relpath(path, os.path.dirname(TIMINGS[0]))}\t{seconds:.1f}\t{code}\t{load:.2f}\n")
 
 
+def finish_part(bench, path):
+    """A finished run's file takes its final name with its runs folder (results/README.md), and
+    `repair` rewrites the index's links for that name (what h5py follows)."""
+    if os.path.isdir(path + ".runs"):
+        shutil.rmtree(path + ".runs")
+    os.replace(part_of(path), path)
+    if os.path.isdir(part_of(path) + ".runs"):
+        os.replace(part_of(path) + ".runs", path + ".runs")
+        subprocess.run([bench, "repair", path], stdout=subprocess.DEVNULL, check=False)
+
+
 def run_one(bench, path, cmd, dry_run):
     """Runs `cmd` (an `xpbd-bench run` without --out) into `path`, unless it or its failure record
     exists. Returns the run's dict, a failure record's (attrs only, status failed) or None (dry run)."""
@@ -111,7 +122,7 @@ def run_one(bench, path, cmd, dry_run):
             print(f"race: exit {done.returncode}; no run recorded for {path}: {said}", file=sys.stderr)
             race_plots.failure_record(failed_file(path), cmd, done.returncode, said, seconds)
             return {"attrs": {"status": "failed", "exit": done.returncode, "message": said}}
-        os.replace(part_of(path), path)
+        finish_part(bench, path)
         print(f"race: {seconds:.1f} s (exit {done.returncode}, load {os.getloadavg()[0]:.2f})", flush=True)
     runs = xbruns.load(path, datasets=race_plots.datasets())
     return runs[-1] if runs else None

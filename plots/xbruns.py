@@ -9,6 +9,7 @@ import json
 import math
 import os
 import sys
+import urllib.parse
 
 import h5py
 import numpy as np
@@ -40,25 +41,100 @@ def dataset_names(level="simulation"):
     return {d["name"] for d in schema()["datasets"] if d["level"] in ("any", level)}
 
 
+def _link_target(index, filename):
+    """Where an external link of the index at `index` (a real path) points, as the harness resolves
+    it (results/README.md): "<x>.runs/<rest>" is in INDEX.runs/, another relative name beside the
+    index; never the working directory."""
+    if os.path.isabs(filename):
+        return filename
+    first, _, rest = filename.replace(os.sep, "/").partition("/")
+    if first.endswith(".runs") and len(first) > 5:
+        return os.path.join(index + ".runs", rest)
+    return os.path.join(os.path.dirname(index), filename)
+
+
+def _one_line(e):
+    text = str(e).strip().splitlines()
+    return text[0] if text else type(e).__name__
+
+
+def run_groups(path, skipped):
+    """(name, h5py group) of every run of a results file, as `report` and xpbd_bench.read read it:
+    the run files of its store (PATH.runs/<store>/, whatever the file is called now), or the runs
+    the file holds or links itself (a packed or older file). Each run file is open only while its
+    run is in hand. A run that cannot be read is named in `skipped` ("PATH: run NAME: why") and left
+    out. Exits with one line for a file that is missing, not HDF5 or without /runs."""
+    if not os.path.exists(path):
+        sys.exit(f"{path}: no such file")
+    real = os.path.realpath(path)
+    try:
+        f = h5py.File(real, "r")
+    except OSError as e:
+        sys.exit(f"{path}: not a readable HDF5 file ({_one_line(e)})")
+    with f:
+        if "runs" not in f or not isinstance(f.get("runs", getlink=False), h5py.Group):
+            sys.exit(f"{path}: no /runs group (not an xpbd-bench results file?)")
+        store = _text(f.attrs.get("store", ""))
+        listed = sorted(f["runs"])
+        if store:
+            yield from _stored_runs(path, real, store, _text(f.attrs.get("links_to", "")), listed, skipped)
+            return
+        for name in listed:
+            link = f["runs"].get(name, getlink=True)
+            try:
+                if isinstance(link, h5py.ExternalLink):
+                    with h5py.File(_link_target(real, link.filename), "r") as rf:
+                        g = rf[link.path]
+                        if not isinstance(g, h5py.Group):
+                            raise TypeError("not a run group")
+                        yield name, g
+                    continue
+                g = f["runs"][name]
+                if not isinstance(g, h5py.Group):
+                    raise TypeError("not a run group")
+            except (OSError, KeyError, TypeError, ValueError) as e:
+                skipped.append(f"{path}: run {name}: {_one_line(e)}")
+                continue
+            yield name, g
+
+
+def _stored_runs(path, real, store, links_to, listed, skipped):
+    folder = os.path.join(real + ".runs", store)
+    if not os.path.isdir(folder) and links_to and not os.path.isabs(links_to):
+        linked = os.path.join(os.path.dirname(real), links_to)  # renamed without its folder: the one its links name
+        folder = linked if os.path.isdir(linked) else folder
+    if not os.path.isdir(folder):
+        skipped.append(f"{path}: its runs folder {path}.runs/{store} is missing (moved, renamed or not copied with it?)")
+        return
+    seen = set()
+    for fn in sorted(os.listdir(folder)):
+        if fn.startswith(".") or not fn.endswith(".h5"):
+            continue
+        seen.add(urllib.parse.unquote(fn[:-3].split(".")[0]))  # NNNN_<name>[.k<job>].h5, its name %XX-quoted
+        try:
+            with h5py.File(os.path.join(folder, fn), "r") as rf:
+                (name, g), = rf["runs"].items()
+                seen.add(name)
+                yield name, g
+        except (OSError, KeyError, TypeError, ValueError) as e:
+            skipped.append(f"{path}: run file {fn}: {_one_line(e)}")
+    for name in listed:
+        if name not in seen:
+            skipped.append(f"{path}: run {name} is listed by the index but its run file is gone from {folder}")
+
+
 def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "relative_dual_residual", "wall_time"),
          level="simulation"):
-    """A list of runs: dict(name, attrs, data) with the requested datasets that exist. A dataset
-    the schema does not list for the level is a programming error in the plot, not missing data."""
+    """A list of runs, by name: dict(name, attrs, data) with the requested datasets that exist. A
+    dataset the schema does not list for the level is a programming error in the plot, not missing
+    data. A run that cannot be read is named on stderr, one line each, and left out."""
     known = dataset_names(level) if level else {d["name"] for d in schema()["datasets"]}
     unknown = [d for d in datasets if d not in known]
     if unknown:
         raise ValueError(f"xbruns.load: {', '.join(unknown)} not in results/schema.json for {level or 'any'} runs")
-    if not os.path.exists(path):
-        sys.exit(f"{path}: no such file")
-    runs = []
-    try:
-        f = h5py.File(path, "r")
-    except OSError as e:
-        sys.exit(f"{path}: not a readable HDF5 file ({e})")
-    with f:
-        if "runs" not in f:
-            sys.exit(f"{path}: no /runs group (not an xpbd-bench results file?)")
-        for name, g in f["runs"].items():
+    runs, skipped = [], []
+    for name, g in run_groups(path, skipped):
+        try:
             attrs = {k: _text(v) for k, v in g.attrs.items()}
             if level and attrs.get("level", "simulation") != level:
                 continue
@@ -69,8 +145,13 @@ def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "rela
                     if a.dtype.kind in "OS":
                         a = np.array([_text(x) for x in a])
                     data[d] = a
-            runs.append(dict(name=name, attrs=attrs, data=data))
-    return runs
+        except (OSError, KeyError, TypeError, ValueError) as e:
+            skipped.append(f"{path}: run {name}: {_one_line(e)}")
+            continue
+        runs.append(dict(name=name, attrs=attrs, data=data))
+    for s in skipped:
+        print(f"{os.path.basename(sys.argv[0]) or 'plots'}: skipped: {s}", file=sys.stderr)
+    return sorted(runs, key=lambda r: r["name"])
 
 
 # The reference's records (results/README.md, run --reference): what a plot needs to judge it.

@@ -121,6 +121,7 @@ int cmd_run(const CommandArgs& argv) {
 
   const bool show = progress_wanted(args);
   int index = 0;
+  std::vector<RunRecord> added;  // reported at the end (the file may hold many more)
   for (const auto& [method, form, tag] : runs) {
     Params q = p;
     if (!form.empty()) q.form = form;
@@ -137,9 +138,11 @@ int cmd_run(const CommandArgs& argv) {
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
     if (failed) throw command_write_error("run", *failed, out, writer.runs_in_file());
     ++index;
-    append_command_run("run", writer, make_simulation_record(p.scene + "_" + tag, q, method, res), writer.runs_in_file());
+    added.push_back(make_simulation_record(p.scene + "_" + tag, q, method, res));
+    added.back().name = append_command_run("run", writer, added.back(), writer.runs_in_file());
   }
-  print_report(out, "table");
+  close_command_writer("run", writer);
+  print_runs(added, "table");
   return 0;
 }
 
@@ -150,6 +153,15 @@ int cmd_report(const CommandArgs& argv) {
   if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
   // Unreadable runs are named on stderr and skipped; the exit code says some were.
   return print_report(args.positional()[0], format) > 0 ? 1 : 0;
+}
+
+int cmd_repair(const CommandArgs& argv) {
+  Args args("repair", argv, {}, 1);
+  if (args.positional().empty()) throw Error("repair: which results file? (repair FILE.h5)");
+  const std::string path = args.positional()[0];
+  const RepairReport rep = repair_results(path);
+  print_repair(path, rep);
+  return 0;
 }
 
 int cmd_pack(const CommandArgs& argv) {

@@ -30,6 +30,7 @@ const Command commands[] = {
      "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] [--time-budget S] --out PREFIX"},
     {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5 [--append]"},
     {"pack", xb::cmd_pack, "pack FILE.h5 --out ONE.h5                 every run of FILE in one self-contained file (to hand to someone)"},
+    {"repair", xb::cmd_repair, "repair FILE.h5                            rebuild FILE's index from its run files; say what was found"},
 };
 
 // A command's exit code; an error is one line (with the rank under mpirun) and exit code 2 (3 for a bug).

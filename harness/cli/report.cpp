@@ -95,6 +95,24 @@ bool has_timing_provenance(const RunRecord& r) {
 }
 }  // namespace
 
+void print_repair(const std::string& path, const RepairReport& rep) {
+  if (rep.packed) {
+    std::cout << "repair: " << path << " holds its " << rep.runs << " runs inline (a packed file): nothing to repair\n";
+    return;
+  }
+  std::cout << "repair: " << path << ": " << rep.runs << " runs; index rebuilt from its run files\n";
+  const auto list = [](const char* what, const std::vector<std::string>& items) {
+    if (items.empty()) return;
+    std::cout << "repair: " << what << " (" << items.size() << "):\n";
+    for (size_t i = 0; i < items.size() && i < 20; ++i) std::cout << "  " << items[i] << "\n";
+    if (items.size() > 20) std::cout << "  ... and " << items.size() - 20 << " more\n";
+  };
+  list("runs now in the index that it did not list", rep.found.relinked);
+  list("runs it listed that are gone or unreadable, left out", rep.found.dangling);
+  list("removed", rep.found.removed);
+  for (const auto& n : rep.found.notes) std::cout << "repair: " << n << "\n";
+}
+
 void warn_skipped(const std::string& command, const std::vector<std::string>& skipped) {
   for (const auto& s : skipped) std::cerr << command << ": skipped unreadable run: " << s << "\n";
 }
@@ -228,12 +246,16 @@ void print_tables(const std::vector<RunRecord>& runs) {
 }
 }  // namespace
 
+void print_runs(const std::vector<RunRecord>& runs, const std::string& format) {
+  if (format == "json") print_json(runs);
+  else print_tables(runs);
+}
+
 int print_report(const std::string& path, const std::string& format) {
   if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
   std::vector<std::string> skipped;
   const auto runs = read_runs(path, false, &skipped);
-  if (format == "json") print_json(runs);
-  else print_tables(runs);
+  print_runs(runs, format);
   warn_skipped("report", skipped);
   return static_cast<int>(skipped.size());
 }
