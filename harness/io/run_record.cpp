@@ -221,6 +221,8 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["reference/iterations"] = L.reference_iterations;
     r.datasets["reference/status"] = L.reference_status;
     r.datasets["reference/time"] = L.reference_time;
+    if (!L.reference_source.empty()) r.datasets["reference/source"] = L.reference_source;
+    if (!res.reference_file.empty()) r.attrs["reference_file"] = res.reference_file;
     if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
   }
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());

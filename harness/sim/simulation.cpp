@@ -5,6 +5,7 @@
 #include "residual_energy.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/process_memory.hpp"
 
 #include <omp.h>
 
@@ -23,10 +24,9 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
       forcing_(p.linear) {
   check_combination(method);
   if (opt.reference) {
-    Timer ref_clock;
-    reference_.emplace(prob_, p, alpha_tilde_);
-    res_.reference_method = reference_->description();
-    res_.reference_time += ref_clock.seconds();
+    if (!opt.reference_file.empty()) store_.emplace(opt.reference_file, p, prob_, alpha_tilde_);
+    res_.reference_file = opt.reference_file;
+    res_.reference_method = store_ ? store_->method() : reference_description(p, alpha_tilde_);
   }
   if (find_method(method)->local) {
     local_.emplace(prob_, ds_, p.xpbd, local_kind(method));
@@ -85,9 +85,12 @@ RunResult Simulation::run() {
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
       if (!stop_ && opt_.on_state) opt_.on_state(SimState{frame + 1, prob_.particles.x, prob_.particles.v});
     }
+  } catch (const OutOfMemory& e) {
+    fail("out_of_memory", std::string(e.what()) + " (in " + phase_ + " at frame " + std::to_string(frame_) +
+                              ", iteration " + std::to_string(iteration_) + ")");
   } catch (const std::bad_alloc&) {
-    fail("error", "out of memory in " + phase_ + " at frame " + std::to_string(frame_) + ", iteration " +
-                      std::to_string(iteration_));
+    fail("out_of_memory", "out of memory in " + phase_ + " at frame " + std::to_string(frame_) + ", iteration " +
+                              std::to_string(iteration_));
   } catch (const std::exception& e) {
     fail("error", e.what());
   }
@@ -97,15 +100,43 @@ RunResult Simulation::run() {
 
 // Checked every outer iteration and every substep, so that no count of either escapes it.
 bool Simulation::over_budget(double excluded) {
+  if (opt_.memory_limit > 0) {
+    const long long rss = resident_bytes();
+    if (rss > opt_.memory_limit) {
+      fail("out_of_memory", "resident set " + gigabytes(static_cast<double>(rss)) + " over the memory limit of " +
+                                gigabytes(opt_.memory_limit) + " at frame " + std::to_string(frame_) + ", iteration " +
+                                std::to_string(iteration_));
+      return true;
+    }
+  }
+  return over_time(excluded);
+}
+
+bool Simulation::over_time(double excluded) {
   if (opt_.time_budget <= 0 || run_clock_.seconds() - res_.reference_time - excluded <= opt_.time_budget) return false;
   char budget[32];
   std::snprintf(budget, sizeof budget, "%g", opt_.time_budget);
-  fail("timeout", std::string("time budget of ") + budget + " s exceeded");
+  fail("over_budget", std::string("time budget of ") + budget + " s exceeded");
   return true;
 }
 
+ReferenceSolution Simulation::solve_reference(int frame, int sub) {
+  if (store_)
+    if (std::optional<ReferenceSolution> r = store_->find(frame, sub, x_pred_)) {
+      res_.log.reference_source.push_back("read");
+      return std::move(*r);
+    }
+  Timer clock;
+  phase_ = "the reference";
+  if (!reference_) reference_.emplace(prob_, p_, alpha_tilde_);
+  ReferenceSolution r = reference_->solve(x_pred_);
+  const bool stored = store_ && store_->store(frame, sub, x_pred_, r, clock.seconds());
+  res_.log.reference_source.push_back(stored ? "stored" : "computed");
+  return r;
+}
+
 void Simulation::substep(int frame, int sub) {
-  if (over_budget(0)) return;
+  if (over_time(0)) return;
   Particles& P = prob_.particles;
   sub_clock_.reset();
   x_old_ = P.x;
@@ -117,9 +148,9 @@ void Simulation::substep(int frame, int sub) {
   P.x = x_pred_;
   lambda_.setZero();
   excluded_ = 0;
-  if (reference_) {
+  if (opt_.reference) {
     Timer ref_clock;
-    ReferenceSolution rs = reference_->solve(x_pred_);
+    ReferenceSolution rs = solve_reference(frame, sub);
     x_ref_ = std::move(rs.x);
     ref_scale_ = mass_norm_distance(prob_, x_ref_, x_pred_);
     res_.log.reference_relative_dual_residual.push_back(rs.relative_dual_residual);
@@ -231,6 +262,9 @@ void Simulation::finish() {
     res_.stats["substeps_rounding_floor"] = rounding_floor_;
   }
   res_.stats["particles"] = prob_.particles.size();
+  // The process's largest resident set so far (its earlier runs included), and the limit it ran under.
+  res_.stats["peak_memory"] = static_cast<double>(peak_resident_bytes());
+  if (opt_.memory_limit > 0) res_.stats["memory_limit"] = opt_.memory_limit;
   res_.final_positions = prob_.particles.x;
 }
 
@@ -245,7 +279,7 @@ RunResult run_simulation(const Problem& prob, const Params& p, const std::string
     return detail::Simulation(prob, p, method, opt).run();
   } catch (const std::bad_alloc&) {  // the run's copies of the problem and its systems
     RunResult r;
-    r.status = "error";
+    r.status = "out_of_memory";
     r.message = "out of memory in the set-up of the run (" + method + ": the problem's copy, A's pattern, the solver)";
     return r;
   }

@@ -7,6 +7,7 @@
 #include "forcing.hpp"
 #include "newton_loop.hpp"
 #include "reference.hpp"
+#include "reference_store.hpp"
 #include "run_options.hpp"
 #include "stability.hpp"
 
@@ -44,8 +45,13 @@ class Simulation {
   };
   enum class StepEnd { ok, stop };
   void substep(int frame, int sub);
-  // Past RunOptions::time_budget (less `excluded` s of this substep's reference): fail("timeout").
+  // Before every outer iteration: a resident set past RunOptions::memory_limit:
+  // fail("out_of_memory"); else over_time.
   bool over_budget(double excluded);
+  // Past RunOptions::time_budget (less `excluded` s of this substep's reference): fail("over_budget").
+  bool over_time(double excluded);
+  // This substep's reference: read from the store where it holds it, else computed (and stored).
+  ReferenceSolution solve_reference(int frame, int sub);
   // The outer loop of step = newton: the one Newton loop (newton_loop.hpp) with the stepper's hooks.
   void newton_substep(int frame, int sub);
   void xpbd_substep(int frame, int sub);
@@ -84,7 +90,8 @@ class Simulation {
   std::optional<NewtonLoop> newton_loop_;  // step = newton
   std::optional<LocalMethod> local_;
   LinearSolver* active_ = nullptr;
-  std::optional<ReferenceSolver> reference_;
+  std::optional<ReferenceSolver> reference_;  // made at the first reference not read from the store
+  std::optional<ReferenceStore> store_;       // RunOptions::reference_file
   StabilityMonitor stability_;
   ForcingRule forcing_;
   Eigen::Matrix3Xd x_pred_, x_old_, dx_, g_, x_ref_;

@@ -49,7 +49,7 @@ void Simulation::log_entry(int frame, int sub, int it, const Entry& e, const Las
   L.newton_residual.push_back(newton);
   L.relative_newton_residual.push_back(newton0_ > 0 ? newton / newton0_ : 0);
   L.energy.push_back(e.energy);
-  if (reference_) {
+  if (opt_.reference) {
     Timer err_clock;
     const double d = mass_norm_distance(prob_, P.x, x_ref_);
     // A substep whose reference does not move (x_ref = x̃) has no scale: absolute error.

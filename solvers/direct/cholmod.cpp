@@ -12,10 +12,12 @@
 #include "../timer.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/process_memory.hpp"
 #include "../solver_settings.hpp"
 
 #include <cholmod.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -64,6 +66,7 @@ class CholmodSolver final : public LinearSolver {
       Timer ta;
       L_ = cholmod_analyze(&view_, &c_);
       analyse_time_ += ta.seconds();
+      check_factor_fits();
       factorise("analyse+factorise");
     } else if (lagged_ && factor_ok_ && ctx.frame == factor_frame_) {
       fresh_ = false;  // keep the factor of an earlier matrix
@@ -111,12 +114,24 @@ class CholmodSolver final : public LinearSolver {
   std::string last_setup_action() const override { return action_; }
 
  private:
+  // The symbolic analysis knows nnz(L) before the numeric factorisation allocates it: where the
+  // process has a memory limit (`run --memory-limit`) that the factor would pass, the run ends as
+  // out of memory now, not after CHOLMOD has tried.
+  void check_factor_fits() const {
+    const long long limit = data_limit_bytes();
+    if (!L_ || limit < 0) return;
+    const double need = c_.lnz * (sizeof(double) + sizeof(int)) + static_cast<double>(std::max(0LL, data_bytes()));
+    if (need > static_cast<double>(limit))
+      throw OutOfMemory("CHOLMOD's factor would not fit the memory limit of " + gigabytes(static_cast<double>(limit)) +
+                        ": its " + std::to_string(static_cast<long long>(c_.lnz)) + " non-zeros (symbolic analysis) and the " +
+                        "process's data segment need " + gigabytes(need));
+  }
+
   void factorise(const char* action) {
     Timer t;
     factor_ok_ = L_ && cholmod_factorize(&view_, L_, &c_) && c_.status == CHOLMOD_OK;
-    if (c_.status == CHOLMOD_OUT_OF_MEMORY)
-      message_ = out_of_memory();
-    else if (!L_)
+    if (c_.status == CHOLMOD_OUT_OF_MEMORY) throw OutOfMemory(out_of_memory());  // the run's status: out_of_memory
+    if (!L_)
       message_ = "CHOLMOD analysis failed";
     else if (c_.status == CHOLMOD_NOT_POSDEF)
       message_ = "matrix not positive definite (CHOLMOD failed at column " + std::to_string(L_->minor) + ")";
