@@ -130,8 +130,7 @@ ReferenceSolution Simulation::solve_reference(int frame, int sub) {
   phase_ = "the reference";
   if (!reference_) reference_.emplace(prob_, p_, alpha_tilde_);
   ReferenceSolution r = reference_->solve(x_pred_);
-  const bool stored = store_ && store_->store(frame, sub, x_pred_, r, clock.seconds());
-  res_.log.reference_source.push_back(stored ? "stored" : "computed");
+  if (store_) res_.log.reference_source.push_back(store_->store(frame, sub, x_pred_, r, clock.seconds()) ? "stored" : "computed");
   return r;
 }
 
