@@ -10,7 +10,8 @@ what is not run, and why.
   spec's `time_budget` (an entry past it ends as over_budget, its log kept, and the race goes on).
 - Memory: each entry runs under `--memory-limit` = `plan.memory_limit` GB, at most what the machine
   has available at its start less `plan.memory_reserve`; an entry predicted over it is skipped
-  before it starts, as is one that ran out of memory or over its budget at a smaller size.
+  before it starts, as is one that ran out of memory at a smaller size (one over its budget there
+  is predicted from that time, a lower bound).
 - The campaign's time: entries are taken in priority order (`plan.priority`, "outer.linear"
   pairs, the rest after them in the spec's order; each size's reference first), smaller sizes
   first within a pair; an entry whose prediction would take the campaign past
@@ -112,16 +113,23 @@ def history(entries, timings):
 
 def predict(spec, e, past, iterations):
     """Sets e.seconds, e.bytes, e.how (and e.action for a skip learnt at a smaller size);
-    `iterations`: the outer iterations the entry is expected to take (for the prior)."""
+    `iterations`: the outer iterations the entry is expected to take (for the prior). An entry
+    that ran out of memory at a smaller size is skipped; one that ran over its budget there is a
+    lower bound: its seconds with plan.slope, at least."""
     smaller = [p for p in past.get(e.key, []) if p[0] < e.rows]
-    bad = [p for p in smaller if p[3] in DONE_BAD]
-    if bad:
-        e.action = f"skip: {bad[-1][3]} at {bad[-1][4]}"
+    oom = [p for p in smaller if p[3] == "out_of_memory"]
+    if oom:
+        e.action = f"skip: out_of_memory at {oom[-1][4]}"
     plan = spec.get("plan", {})
     prior_s, prior_b = prior(spec, e.linear if e.outer != REFERENCE else f"reference.{e.linear}", e.rows, iterations)
     good = [p for p in smaller if p[3] not in DONE_BAD]
     f = fit([(p[0], p[1]) for p in good], plan.get("slope", 1.2))
     e.seconds, e.how = (prior_s, "prior") if f is None else (math.exp(f[1] + f[0] * math.log(e.rows)), f[3])
+    late = [p for p in smaller if p[3] in ("over_budget", "timeout")]
+    if late:
+        bound = late[-1][1] * (e.rows / late[-1][0]) ** plan.get("slope", 1.2)
+        if bound > e.seconds:
+            e.seconds, e.how = bound, f"over its budget at {late[-1][4]}: at least"
     g = fit([(p[0], p[2]) for p in good if p[2] == p[2]], plan.get("memory_slope", 1.1))
     e.bytes = prior_b if g is None else math.exp(g[1] + g[0] * math.log(e.rows))
 

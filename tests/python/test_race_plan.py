@@ -69,11 +69,13 @@ def test_what_would_not_fit_or_failed_smaller_is_skipped_before_it_starts():
     es, t = entries(), {}
     done(es, t, "s", "newton", "cholmod", 1.0, peak=1e8)
     done(es, t, "m", "newton", "cholmod", 10.0, peak=2e9)  # memory ×20 per decade: 40 GB at l
-    done(es, t, "m", "xpbd", "jacobi-pcg", 900.0, status="over_budget")
+    done(es, t, "m", "xpbd", "jacobi-pcg", 900.0, status="over_budget")  # ≥ 900 × 10^1.2 s at l
+    done(es, t, "m", "newton", "mgpbd", 5.0, status="out_of_memory")
     plan.make_plan(SPEC, es, t, lambda e: 8, limit_gb=20)
     assert find(es, "l", "newton", "cholmod").action.startswith("skip: predicted 40.0 GB > the 20.0 GB limit")
-    assert find(es, "l", "xpbd", "jacobi-pcg").action == "skip: over_budget at m"
-    assert find(es, "l", "newton", "mgpbd").action == "run"
+    late = find(es, "l", "xpbd", "jacobi-pcg")
+    assert late.action.startswith("skip: predicted 14264 s > the time budget") and late.how.startswith("over its budget at m")
+    assert find(es, "l", "newton", "mgpbd").action == "skip: out_of_memory at m"
     slow = entries(pairs=(("newton", "mgpbd"),))
     t2 = {}
     done(slow, t2, "s", "newton", "mgpbd", 10.0)
