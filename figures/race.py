@@ -281,8 +281,8 @@ def triad_gb_s(bench):
     else numpy's (one thread); None where neither runs."""
     micro = os.path.join(os.path.dirname(os.path.abspath(bench)), "xb_microbench")
     if os.access(micro, os.X_OK):
-        done = subprocess.run([micro, "--benchmark_filter=^triad", "--benchmark_format=json"], capture_output=True,
-                              text=True)
+        done = subprocess.run([micro, "--benchmark_filter=^triad", "--benchmark_format=json", "--benchmark_min_time=0.2"],
+                              capture_output=True, text=True)
         try:
             rates = [b["bytes_per_second"] for b in json.loads(done.stdout)["benchmarks"] if "bytes_per_second" in b]
             return max(rates) / 1e9 if rates else None

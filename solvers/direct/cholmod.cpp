@@ -152,7 +152,8 @@ class CholmodSolver final : public LinearSolver {
            " non-zeros (about " + mb + " MB)";
   }
 
-  // x = L⁻ᵀL⁻¹ b with the current factor; false if CHOLMOD failed.
+  // x = L⁻ᵀL⁻¹ b with the current factor; false if CHOLMOD failed; OutOfMemory (the run's status
+  // out_of_memory) where it ran out of memory.
   bool apply_factor(const Vector& b, Vector& x) {
     cholmod_dense bd{};
     bd.nrow = b.size();
@@ -163,6 +164,9 @@ class CholmodSolver final : public LinearSolver {
     bd.xtype = CHOLMOD_REAL;
     bd.dtype = CHOLMOD_DOUBLE;
     cholmod_dense* xd = cholmod_solve(CHOLMOD_A, L_, &bd, &c_);
+    if (!xd && c_.status == CHOLMOD_OUT_OF_MEMORY)
+      throw OutOfMemory("out of memory in CHOLMOD's solve with a factor of " +
+                        std::to_string(static_cast<long long>(c_.lnz)) + " non-zeros");
     if (!xd) return false;
     x.resize(b.size());
     std::copy(static_cast<double*>(xd->x), static_cast<double*>(xd->x) + b.size(), x.data());
@@ -202,12 +206,12 @@ class CholmodSolver final : public LinearSolver {
     return st;
   }
 
-  // CHOLMOD's solve failed inside the preconditioner (out of memory): caught in solve_lagged.
+  // CHOLMOD's solve failed inside the preconditioner: caught in solve_lagged.
   struct SolveFailed {};
 
   // CG preconditioned by the factor; with an old factor at most lagged_max_iterations, then a
   // new factor and CG again on what is left (b − Ax), judged against the original b. A failed
-  // factorisation or CHOLMOD solve ends it as a breakdown.
+  // CHOLMOD solve ends it as a breakdown; running out of memory in either, as OutOfMemory.
   LinearStats solve_lagged(const Vector& b, Vector& x) {
     Timer t;
     LinearStats st;
@@ -215,7 +219,7 @@ class CholmodSolver final : public LinearSolver {
       st = lagged_cg(b, x, t);
     } catch (const SolveFailed&) {
       st.status = LinearStatus::breakdown;
-      st.message = "CHOLMOD solve failed (out of memory?)";
+      st.message = "CHOLMOD solve failed";
       x = Vector::Zero(b.size());
     }
     st.solve_time = t.seconds();
