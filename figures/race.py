@@ -363,7 +363,7 @@ def main():
         args.total_seconds = spec.get("plan", {}).get("total_seconds")
     scenes = {k: v for k, v in spec["scenes"].items() if not args.only or k in args.only.split(",")}
     if args.fresh and not args.dry_run:
-        for old in (os.path.join(args.out, "data"), os.path.join(args.out, "timings.tsv")):
+        for old in [os.path.join(args.out, n) for n in ("data", "timings.tsv", "machine.json", "plan.json", "plan.txt")]:
             if os.path.isdir(old):
                 shutil.rmtree(old)
             elif os.path.exists(old):

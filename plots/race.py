@@ -302,7 +302,8 @@ def headline(scenes):
 
 
 RULES = ("Each entry (an outer method with a linear method and a forcing rule; EW: linear.forcing = "
-         "eisenstat_walker) in its own process, with `--reference`: the position error is the distance to the "
+         "eisenstat_walker) in its own process, reading its size's one reference (`--reference-file`, computed once "
+         "per size): the position error is the distance to the "
          "backward-Euler solution of the substep, ‖x − x_ref‖_M / ‖x_ref − x̃‖_M. `time to e`: the wall time within "
          "the frame (the reference's time is not in it) at which the error first is at most e; — (v): never, v the "
          "smallest error the run reached; — (reference unconverged …): the reference did not converge in that substep, "
