@@ -13,7 +13,7 @@ JOBS   ?= $(shell nproc)
 export OMP_WAIT_POLICY ?= passive
 export GOMP_SPINCOUNT ?= 10000
 
-.PHONY: setup build demo test test-asan fuzz clean figures race race-full perf perf-baseline
+.PHONY: setup build demo test test-asan fuzz clean figures race race-scale race-full perf perf-baseline
 
 setup:
 	@bash scripts/setup.sh
@@ -41,16 +41,23 @@ figures: build
 	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
 # The race on the truth (figures/race/race.toml, docs/race.md): outer methods (XPBD, its two
-# variants, Newton) x linear methods, one process per run, each with --reference; the time to a
-# position error of 1e-2 and 1e-4 against the backward-Euler solution, into plots/race/
-# (race_<scene>.png, summary.md, timings.tsv). `race`: one size per scene (the spec's quick_size)
-# and Eisenstat-Walker only (10-20 minutes on a quiet 2-core machine, references included);
-# `race-full`: every size and forcing rule (squash to 850K tets: hours). Both resume (finished runs
-# are kept); RACE_ARGS="--fresh", "--only squash", "--outer newton", "--linear mgpbd,cholmod".
+# variants, Newton) x linear methods, one process per run, each reading its size's one reference
+# (computed once per size); the time to a position error of 1e-2, 1e-3 and 1e-4 against the
+# backward-Euler solution, into plots/race/ (race_<scene>.png, summary.md, timings.tsv, plan.txt).
+# `race`: one size per scene (the spec's quick_size) and Eisenstat-Walker only; `race-scale`: every
+# size (the squash to 1.6M tets, the twist bar to 255K, the cloth to 512^2) with Eisenstat-Walker,
+# each entry under a predicted time budget and a memory limit, cut to the spec's plan.total_seconds
+# (2 h) of machine time in all; `race-full`: every size and forcing rule, no total. All resume
+# (finished runs are kept): run them in parts. RACE_ARGS="--dry-run" prints the plan (each entry's
+# predicted time and memory, what is skipped or cut and why) and stops; "--fresh", "--only squash",
+# "--outer newton", "--linear mgpbd,cholmod", "--reference-jobs 2" (references first, in parallel).
 # Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md
 RACE_ARGS ?=
 race: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --quick $(RACE_ARGS)
+
+race-scale: build
+	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --scale $(RACE_ARGS)
 
 race-full: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench $(RACE_ARGS)

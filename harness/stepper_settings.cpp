@@ -27,6 +27,7 @@ const SettingTable<StepperSettings>& stepper_settings() {
       setting("xpbd.line_search", "step = newton's line search on E: robust_armijo (Armijo, and below E's rounding the trapezoid rule on the gradients) | armijo", &S::line_search, {"robust_armijo", "armijo"}),
       setting("xpbd.exact_hessian_below", "adaptive projection: relative |grad E| below which the exact Hessian is tried", &S::exact_hessian_below, 0, 1),
       setting("reference.method", "--reference solution: newton (Newton on E with cholmod to |grad E| <= 1e-10 relative, every alpha~ > 0) | xpbd (XPBD's fixed point by cholmod) | auto (newton where every alpha~ > 0, else xpbd)", &S::reference_method, {"auto", "newton", "xpbd"}),
+      setting("reference.linear", "linear method of the newton reference's solves: cholmod (exact) | mgpbd | jacobi-pcg (iterative, Eisenstat-Walker down to 1e-12: where the factor does not fit; the stop test on |grad E| is the same)", &S::reference_linear, {"cholmod", "mgpbd", "jacobi-pcg"}),
   };
   return table;
 }

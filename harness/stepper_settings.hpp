@@ -48,6 +48,10 @@ struct StepperSettings {
   // backward-Euler solution; every α̃ > 0) | xpbd (XPBD's fixed point by CHOLMOD) | auto (newton
   // where every α̃ > 0, else xpbd).
   std::string reference_method = "auto";
+  // The linear method of the newton reference's solves: cholmod (exact) | mgpbd | jacobi-pcg
+  // (iterative, to a tolerance that Eisenstat–Walker tightens to 1e-12: for sizes whose factor does
+  // not fit the machine). The reference's stop test on ‖∇E‖ is the same.
+  std::string reference_linear = "cholmod";
 };
 
 const SettingTable<StepperSettings>& stepper_settings();

@@ -5,7 +5,7 @@ usage: python3 plots/stability.py RESULTS.h5 [-o OUT.png] [--case KEY[,KEY...]]
 
 Cases are the values of --case (default: the attribute `variant` where runs differ in it, else the
 swept keys of a sweep, else the scene). Each cell is coloured by status (ok, max_iterations,
-timeout, diverged, nan, breakdown, error) and shows it with the final relative dual residual;
+over_budget, out_of_memory, diverged, nan, breakdown, error) and shows it with the final relative dual residual;
 with repeats, the worst status is shown. Writes PNG and PDF and prints the table.
 """
 import argparse

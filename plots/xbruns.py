@@ -14,9 +14,12 @@ import urllib.parse
 import h5py
 import numpy as np
 
-STATUS_ORDER = ["ok", "max_iterations", "timeout", "diverged", "nan", "breakdown", "error"]
-STATUS_COLOURS = {"ok": "#4caf50", "max_iterations": "#ffc107", "timeout": "#ff9800", "diverged": "#e53935",
-                  "nan": "#8e0000", "breakdown": "#8e24aa", "error": "#757575"}
+# over_budget was called timeout before (older files); out_of_memory: past run --memory-limit.
+STATUS_ORDER = ["ok", "max_iterations", "over_budget", "timeout", "out_of_memory", "diverged", "nan", "breakdown",
+                "error"]
+STATUS_COLOURS = {"ok": "#4caf50", "max_iterations": "#ffc107", "over_budget": "#ff9800", "timeout": "#ff9800",
+                  "out_of_memory": "#6d4c41", "diverged": "#e53935", "nan": "#8e0000", "breakdown": "#8e24aa",
+                  "error": "#757575"}
 
 
 def _text(v):

@@ -203,6 +203,8 @@ void add_reference_records(RunRecord& r, const RunResult& res) {
   r.datasets["reference/certified"] = L.reference_certified;
   r.datasets["reference/certified_threshold"] = L.reference_certified_threshold;
   r.datasets["reference/certificate_note"] = L.reference_certificate_note;
+  if (!L.reference_source.empty()) r.datasets["reference/source"] = L.reference_source;
+  if (!res.reference_file.empty()) r.attrs["reference_file"] = res.reference_file;
   if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
 }
 }  // namespace

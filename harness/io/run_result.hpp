@@ -75,6 +75,10 @@ struct IterationLog {
   std::vector<double> reference_certified_threshold;  // the finest threshold trusted (∞: none)
   std::vector<std::string> reference_certificate_note;  // why not certified ("" where it is)
   std::vector<double> reference_time;  // s of each substep's reference (off every clock)
+  // Per substep, where its reference came from (RunOptions::reference_file): read (from the
+  // file), stored (computed here and added to it) or computed (here; not stored: no file, or the
+  // file holds one of another x̃ for that substep).
+  std::vector<std::string> reference_source;
   // Per substep, how its outer loop ended: converged | max_iterations for XPBD's methods; under
   // step = newton the stop reason (harness/sim/stop_reason.hpp: converged, rounding_floor,
   // line_search_at_floor, max_iterations, line_search_failed), and the one success predicate's
@@ -86,7 +90,7 @@ struct IterationLog {
 
 struct RunResult {
   // ok | max_iterations | line_search_failed | reference_unconverged | diverged | nan | breakdown |
-  // timeout | error (results/README.md)
+  // over_budget | out_of_memory | error (results/README.md)
   std::string status = "ok";
   std::string message;
   std::string form_used;      // dual | primal for global methods, none for local sweeps
@@ -97,6 +101,7 @@ struct RunResult {
   double wall_time = 0;             // s, the whole run (without the reference's time)
   double reference_time = 0;        // s spent on references and errors (excluded from every clock)
   std::string reference_method;     // how the reference was computed ("" = no reference)
+  std::string reference_file;       // the file of stored references ("" = none)
   int substeps_converged = 0, substeps_total = 0;
   std::map<std::string, double> stats;                     // solver statistics (+ run extras)
   std::map<std::string, std::vector<double>> arrays;       // per-level and similar arrays

@@ -30,9 +30,9 @@ const ResultsSchema& results_schema() {
           {"any", "int", {"omp_threads", "cpu_count", "blas_threads"}},
           {"any", "float", {"load_average", "levels", "operator_complexity", "grid_complexity", "factor_nnz", "factor_flops", "factorisations", "factorise_time_total", "analyse_time_total", "lagged_setups", "refactorisations_in_solve", "mpi_ranks", "setup_count", "refresh_count", "reuse_count", "setup_full", "setup_reused", "setup_time_total", "refresh_time_total", "single_precision", "primal_rows", "primal_nonzeros"}},
           {"any", "number", {"rows"}},
-          {"simulation", "string", {"profile", "reference_method", "sweep_spec", "sweep_description", "sweep_params", "sweep_point", "sweep_key", "sweep_base"}},
+          {"simulation", "string", {"profile", "reference_method", "reference_file", "sweep_spec", "sweep_description", "sweep_params", "sweep_point", "sweep_key", "sweep_base"}},
           {"simulation", "int", {"outer_iterations", "substeps_total", "substeps_converged", "reference", "reference_substeps_unconverged", "reference_substeps_uncertified", "sweep_index", "sweep_repeat"}},
-          {"simulation", "float", {"final_dual_residual", "relative_dual_residual", "final_authors_dual_residual", "wall_time", "nonzeros", "particles", "colors", "jacobi_relaxation_used", "authors_skipped_last_sweep", "time_budget", "reference_dual_residual", "reference_time", "final_position_error", "final_newton_residual", "final_relative_newton_residual", "reference_energy_gradient", "line_search_failures", "substeps_rounding_floor", "reference_error_estimate", "reference_certified_threshold"}},
+          {"simulation", "float", {"final_dual_residual", "relative_dual_residual", "final_authors_dual_residual", "wall_time", "nonzeros", "particles", "colors", "jacobi_relaxation_used", "authors_skipped_last_sweep", "time_budget", "reference_dual_residual", "reference_time", "final_position_error", "final_newton_residual", "final_relative_newton_residual", "reference_energy_gradient", "line_search_failures", "substeps_rounding_floor", "reference_error_estimate", "reference_certified_threshold", "peak_memory", "memory_limit"}},
           // The measure each run's stop test read and where it ended (harness/io/run_record.cpp).
           {"simulation", "string", {"convergence_measure"}},
           {"simulation", "float", {"final_convergence", "final_relative_convergence"}},
@@ -45,7 +45,7 @@ const ResultsSchema& results_schema() {
           {"any", "float", {"level_rows", "level_nnz"}},
           {"simulation", "int", {"frame", "substep", "iteration", "linear_iterations", "linear_history/offset", "reference/iterations", "line_search_trials", "exact_hessian", "projected_elements", "active_bounds", "substep_success", "reference/success", "reference/certified"}},
           {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "newton_residual", "relative_newton_residual", "energy", "wall_time", "step_time", "step_length", "fill_time", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_tolerance", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "reference/relative_energy_gradient", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets", "relative_gradient_floor", "hessian_time", "reference/time", "reference/energy_gradient", "reference/gradient_floor", "reference/error_scale", "reference/error_estimate", "reference/contraction", "reference/certified_threshold"}},
-          {"simulation", "string", {"linear_setup_action", "reference/status", "substep_status", "reference/certificate_note"}},
+          {"simulation", "string", {"linear_setup_action", "reference/status", "reference/source", "substep_status", "reference/certificate_note"}},
           {"linear", "float", {"residual", "time", "solution"}},
       }),
   };

@@ -13,7 +13,6 @@
 
 namespace xb {
 
-namespace {
 std::string resolve_reference_method(const std::string& requested, const Eigen::VectorXd& alpha_tilde) {
   const bool compliant = (alpha_tilde.array() > 0).all();
   if (requested == "auto") return compliant ? "newton" : "xpbd";
@@ -22,15 +21,18 @@ std::string resolve_reference_method(const std::string& requested, const Eigen::
                 "rigid constraint (use reference.method=xpbd)");
   return requested;
 }
-}  // namespace
 
-std::string ReferenceSolver::description() const {
-  if (method_ == "newton")
-    return std::string("newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's "
-                       "Newton loop, cholmod on the primal form with the full geometric stiffness (xpbd.hessian_projection = ") +
-           projection + "), robust Armijo backtracking on E, the ground planes as bounds (projected Newton), from x~, "
-           "until |grad E| (free) <= 1e-10 of its value at x~ or at its rounding floor, at most 100 iterations; the "
-           "iterate with the smallest |grad E| is the reference";
+std::string reference_description(const Params& p, const Eigen::VectorXd& alpha_tilde) {
+  if (resolve_reference_method(p.reference_method, alpha_tilde) == "newton") {
+    const std::string linear = p.reference_linear == "cholmod"
+                                   ? std::string("cholmod")
+                                   : p.reference_linear + " (eisenstat_walker down to 1e-12)";
+    return "newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's Newton "
+           "loop, " + linear + " on the primal form with the full geometric stiffness (xpbd.hessian_projection = " +
+           ReferenceSolver::projection + "), robust Armijo backtracking on E, the ground planes as bounds (projected "
+           "Newton), from x~, until |grad E| (free) <= 1e-10 of its value at x~ or at its rounding floor, at most 100 "
+           "iterations; the iterate with the smallest |grad E| is the reference";
+  }
   return "xpbd: cholmod (global direct solve of A dlambda = -(C + alpha~ lambda)), omega = 1, from the substep's "
          "predicted state x~ with lambda = 0, recomputed every substep from the run's own state; stops at a dual "
          "residual of 1e-10 relative or when it stops improving (no 1% gain in 5 iterations), at most 100 "
@@ -40,7 +42,8 @@ std::string ReferenceSolver::description() const {
 ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eigen::VectorXd& alpha_tilde,
                                  const ReferenceSettings& settings)
     : prob_(prob), alpha_tilde_(alpha_tilde), h_(p.dt / p.substeps),
-      method_(resolve_reference_method(p.reference_method, alpha_tilde)), ds_(prob), newton_params_(p) {
+      method_(resolve_reference_method(p.reference_method, alpha_tilde)), description_(reference_description(p, alpha_tilde)),
+      ds_(prob), newton_params_(p) {
   const MethodInfo* m = find_method("cholmod");
   if (!m || !m->available) throw Error("reference: the direct solver 'cholmod' is not available");
   if (method_ == "xpbd") {
@@ -54,8 +57,13 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
   q.primal_residual = "keep";
   q.cholmod.refactor = "always";
   q.linear.forcing = "fixed";
-  q.linear.stop_norm = "primal";  // CHOLMOD's one solve, no refinement rounds
-  newton_.emplace(prob_, ds_, "cholmod", q, alpha_tilde_);
+  q.linear.stop_norm = "primal";  // CHOLMOD's one solve, no refinement rounds; an iterative one stops on K's residual
+  if (q.reference_linear != "cholmod") {  // tightened with ‖∇E‖ down to 1e-12 (harness/sim/forcing.hpp)
+    q.linear.forcing = "eisenstat_walker";
+    q.linear.tol = 1e-12;
+    forcing_.emplace(q.linear);
+  }
+  newton_.emplace(prob_, ds_, q.reference_linear, q, alpha_tilde_);
   NewtonSettings s;
   s.stop.rtol = settings.target_relative;
   s.stop.atol = 0;
@@ -102,6 +110,7 @@ ReferenceSolution ReferenceSolver::solve_newton(const Eigen::Matrix3Xd& x_pred) 
     out.dual_residual = (v.state.C + alpha_tilde_.cwiseProduct(v.lambda)).norm();
     out.relative_energy_gradient = v.gradient0 > 0 ? v.gradient / v.gradient0 : 0;
   };
+  if (forcing_) hooks.tolerance = [this](int it, double gradient) { return forcing_->next(it, gradient); };
   Eigen::Matrix3Xd x;
   const NewtonOutcome o = loop_->minimise(x, x_pred, hooks);
   out.iterations = o.iterations;

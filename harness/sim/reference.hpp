@@ -2,9 +2,10 @@
 //  - newton (the default where every α̃ > 0): the solution of the time step itself, the minimiser of
 //    the incremental potential E (harness/sim/newton.hpp) over the ground planes' bounds — the
 //    stepper's own Newton loop (harness/sim/newton_loop.hpp) with CHOLMOD on the primal form
-//    (projection `projection` below), from x̃, until ‖∇E‖ (the free gradient) ≤ 1e-10 of its value
-//    at x̃ or at its rounding floor, at most 100 iterations (ReferenceSettings); the iterate with the
-//    smallest ‖∇E‖ is the reference.
+//    (projection `projection` below; reference.linear = mgpbd | jacobi-pcg: that method, to a
+//    tolerance Eisenstat–Walker tightens down to 1e-12), from x̃, until ‖∇E‖ (the free gradient)
+//    ≤ 1e-10 of its value at x̃ or at its rounding floor, at most 100 iterations
+//    (ReferenceSettings); the iterate with the smallest ‖∇E‖ is the reference.
 //  - xpbd (the default where some constraint is rigid, α̃ = 0): XPBD's own fixed point — CHOLMOD on
 //    A Δλ = −(C + α̃λ), full step ω = 1, from x̃ with λ = 0, until the dual residual falls to 1e-10 of
 //    its first value or stops improving (no 1% gain over 5 iterations), at most 100 iterations;
@@ -17,6 +18,7 @@
 #pragma once
 
 #include "certificate.hpp"
+#include "forcing.hpp"
 #include "global_step.hpp"
 #include "newton_loop.hpp"
 
@@ -28,6 +30,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 
 namespace xb {
 
@@ -67,6 +70,35 @@ struct ReferenceSettings {
   int max_iterations = 100;
 };
 
+// Every field of ReferenceSolution but x, by name: what a stored reference carries
+// (harness/sim/reference_store.hpp; `run --reference-file`). A new field is one line here.
+using ReferenceMember = std::variant<double ReferenceSolution::*, int ReferenceSolution::*, bool ReferenceSolution::*,
+                                     std::string ReferenceSolution::*, StopReason ReferenceSolution::*>;
+struct ReferenceField {
+  const char* name;
+  ReferenceMember member;
+};
+inline const ReferenceField reference_fields[] = {
+    {"dual_residual", &ReferenceSolution::dual_residual},
+    {"relative_dual_residual", &ReferenceSolution::relative_dual_residual},
+    {"relative_energy_gradient", &ReferenceSolution::relative_energy_gradient},
+    {"iterations", &ReferenceSolution::iterations},
+    {"status", &ReferenceSolution::status},
+    {"error_scale", &ReferenceSolution::error_scale},
+    {"energy_gradient", &ReferenceSolution::energy_gradient},
+    {"gradient_floor", &ReferenceSolution::gradient_floor},
+    {"error_estimate", &ReferenceSolution::error_estimate},
+    {"contraction", &ReferenceSolution::contraction},
+    {"certified", &ReferenceSolution::certified},
+    {"certificate_note", &ReferenceSolution::certificate_note},
+};
+
+// reference.method as run: auto resolved (newton where every α̃ > 0, else xpbd); throws xb::Error
+// for newton with a rigid constraint.
+std::string resolve_reference_method(const std::string& requested, const Eigen::VectorXd& alpha_tilde);
+// What the recorder writes as reference_method, for these parameters.
+std::string reference_description(const Params& p, const Eigen::VectorXd& alpha_tilde);
+
 class ReferenceSolver {
  public:
   static constexpr double target_relative = 1e-10;
@@ -84,7 +116,7 @@ class ReferenceSolver {
   // xpbd reference.
   Certificate certify(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred);
   // What the recorder writes as reference_method.
-  std::string description() const;
+  std::string description() const { return description_; }
   const std::string& method() const { return method_; }
 
  private:
@@ -94,13 +126,14 @@ class ReferenceSolver {
   const Problem& prob_;
   const Eigen::VectorXd& alpha_tilde_;
   double h_;
-  std::string method_;
+  std::string method_, description_;
   DualSystem ds_;
   std::unique_ptr<LinearSolver> direct_;  // xpbd
   Params newton_params_;
   std::optional<GlobalStep> newton_;      // newton
   std::optional<NewtonLoop> loop_;        // newton: the stepper's Newton loop on newton_
   std::optional<MinimiserCertificate> certificate_;  // newton
+  std::optional<ForcingRule> forcing_;    // newton with an iterative reference.linear
   bool first_setup_ = true;
 };
 

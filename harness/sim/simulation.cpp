@@ -5,6 +5,7 @@
 #include "residual_energy.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/process_memory.hpp"
 
 #include <omp.h>
 
@@ -26,10 +27,9 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
   m_.criterion.max_iterations = p.max_iterations;
   if (!newton_) m_.projection = parse_projection(p.hessian_projection, "xpbd.hessian_projection");
   if (opt.reference) {
-    Timer ref_clock;
-    truth_.solver.emplace(prob_, p, alpha_tilde_);
-    res_.reference_method = truth_.solver->description();
-    res_.reference_time += ref_clock.seconds();
+    if (!opt.reference_file.empty()) truth_.store.emplace(opt.reference_file, p, prob_, alpha_tilde_);
+    res_.reference_file = opt.reference_file;
+    res_.reference_method = truth_.store ? truth_.store->method() : reference_description(p, alpha_tilde_);
   }
   if (find_method(method)->local) {
     m_.local.emplace(prob_, ds_, p.xpbd, local_kind(method));
@@ -88,9 +88,12 @@ RunResult Simulation::run() {
       if (!stop_ && opt_.on_frame) opt_.on_frame(frame, prob_.particles.x);
       if (!stop_ && opt_.on_state) opt_.on_state(SimState{frame + 1, prob_.particles.x, prob_.particles.v});
     }
+  } catch (const OutOfMemory& e) {
+    fail("out_of_memory", std::string(e.what()) + " (in " + where_.phase + " at frame " + std::to_string(where_.frame) +
+                              ", iteration " + std::to_string(where_.iteration) + ")");
   } catch (const std::bad_alloc&) {
-    fail("error", "out of memory in " + where_.phase + " at frame " + std::to_string(where_.frame) + ", iteration " +
-                      std::to_string(where_.iteration));
+    fail("out_of_memory", "out of memory in " + where_.phase + " at frame " + std::to_string(where_.frame) + ", iteration " +
+                              std::to_string(where_.iteration));
   } catch (const std::exception& e) {
     fail("error", e.what());
   }
@@ -100,15 +103,43 @@ RunResult Simulation::run() {
 
 // Checked every outer iteration and every substep, so that no count of either escapes it.
 bool Simulation::over_budget(double excluded) {
+  if (opt_.memory_limit > 0) {
+    const long long rss = resident_bytes();
+    if (rss > opt_.memory_limit) {
+      fail("out_of_memory", "resident set " + gigabytes(static_cast<double>(rss)) + " over the memory limit of " +
+                                gigabytes(opt_.memory_limit) + " at frame " + std::to_string(where_.frame) + ", iteration " +
+                                std::to_string(where_.iteration));
+      return true;
+    }
+  }
+  return over_time(excluded);
+}
+
+bool Simulation::over_time(double excluded) {
   if (opt_.time_budget <= 0 || clock_.run.seconds() - res_.reference_time - excluded <= opt_.time_budget) return false;
   char budget[32];
   std::snprintf(budget, sizeof budget, "%g", opt_.time_budget);
-  fail("timeout", std::string("time budget of ") + budget + " s exceeded");
+  fail("over_budget", std::string("time budget of ") + budget + " s exceeded");
   return true;
 }
 
+ReferenceSolution Simulation::solve_reference(int frame, int sub) {
+  if (truth_.store)
+    if (std::optional<ReferenceSolution> r = truth_.store->find(frame, sub, substep_.x_pred)) {
+      res_.log.reference_source.push_back("read");
+      return std::move(*r);
+    }
+  Timer clock;
+  where_.phase = "the reference";
+  if (!truth_.solver) truth_.solver.emplace(prob_, p_, alpha_tilde_);
+  ReferenceSolution r = truth_.solver->solve(substep_.x_pred);
+  if (truth_.store)
+    res_.log.reference_source.push_back(truth_.store->store(frame, sub, substep_.x_pred, r, clock.seconds()) ? "stored" : "computed");
+  return r;
+}
+
 void Simulation::substep(int frame, int sub) {
-  if (over_budget(0)) return;
+  if (over_time(0)) return;
   Particles& P = prob_.particles;
   clock_.sub.reset();
   substep_.x_old = P.x;
@@ -120,9 +151,9 @@ void Simulation::substep(int frame, int sub) {
   P.x = substep_.x_pred;
   substep_.lambda.setZero();
   clock_.excluded = 0;
-  if (truth_.solver) {
+  if (opt_.reference) {
     Timer ref_clock;
-    ReferenceSolution rs = truth_.solver->solve(substep_.x_pred);
+    ReferenceSolution rs = solve_reference(frame, sub);
     res_.log.reference_time.push_back(ref_clock.seconds());
     log_reference(rs);
     truth_.x = std::move(rs.x);
@@ -247,6 +278,9 @@ void Simulation::finish() {
     res_.stats["substeps_rounding_floor"] = ends_.rounding_floor;
   }
   res_.stats["particles"] = prob_.particles.size();
+  // The process's largest resident set so far (its earlier runs included), and the limit it ran under.
+  res_.stats["peak_memory"] = static_cast<double>(peak_resident_bytes());
+  if (opt_.memory_limit > 0) res_.stats["memory_limit"] = opt_.memory_limit;
   res_.final_positions = prob_.particles.x;
 }
 
@@ -261,7 +295,7 @@ RunResult run_simulation(const Problem& prob, const Params& p, const std::string
     return detail::Simulation(prob, p, method, opt).run();
   } catch (const std::bad_alloc&) {  // the run's copies of the problem and its systems
     RunResult r;
-    r.status = "error";
+    r.status = "out_of_memory";
     r.message = "out of memory in the set-up of the run (" + method + ": the problem's copy, A's pattern, the solver)";
     return r;
   }

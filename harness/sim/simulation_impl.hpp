@@ -7,6 +7,7 @@
 #include "forcing.hpp"
 #include "newton_loop.hpp"
 #include "reference.hpp"
+#include "reference_store.hpp"
 #include "run_options.hpp"
 #include "stability.hpp"
 
@@ -41,8 +42,13 @@ class Simulation {
   };
   enum class StepEnd { ok, stop };
   void substep(int frame, int sub);
-  // Past RunOptions::time_budget (less `excluded` s of this substep's reference): fail("timeout").
+  // Before every outer iteration: a resident set past RunOptions::memory_limit:
+  // fail("out_of_memory"); else over_time.
   bool over_budget(double excluded);
+  // Past RunOptions::time_budget (less `excluded` s of this substep's reference): fail("over_budget").
+  bool over_time(double excluded);
+  // This substep's reference: read from the store where it holds it, else computed (and stored).
+  ReferenceSolution solve_reference(int frame, int sub);
   // The outer loop of step = newton: the one Newton loop (newton_loop.hpp) with the stepper's hooks.
   void newton_substep(int frame, int sub);
   void xpbd_substep(int frame, int sub);
@@ -100,7 +106,8 @@ class Simulation {
 
   // The truth: each substep's reference and what the position error is measured against.
   struct Truth {
-    std::optional<ReferenceSolver> solver;
+    std::optional<ReferenceSolver> solver;  // made at the first reference not read from the store
+    std::optional<ReferenceStore> store;    // RunOptions::reference_file
     Eigen::Matrix3Xd x;  // x_ref
     double scale = 0;    // position_error's denominator (ReferenceSolution::error_scale)
   } truth_;

@@ -49,7 +49,7 @@ void Simulation::log_entry(int frame, int sub, int it, const Entry& e, const Las
   L.newton_residual.push_back(newton);
   L.relative_newton_residual.push_back(substep_.newton0 > 0 ? newton / substep_.newton0 : 0);
   L.energy.push_back(e.energy);
-  if (truth_.solver) {
+  if (opt_.reference) {
     Timer err_clock;
     const double d = mass_norm_distance(prob_, P.x, truth_.x);
     // The scale is positive but where no particle is free (ReferenceSolution::error_scale).

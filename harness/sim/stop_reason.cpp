@@ -1,5 +1,7 @@
 #include "stop_reason.hpp"
 
+#include "../../core/error.hpp"
+
 #include <cmath>
 
 namespace xb {
@@ -19,6 +21,12 @@ std::string stop_reason_name(StopReason r) {
     case StopReason::interrupted: return "interrupted";
   }
   return "unknown";
+}
+
+StopReason stop_reason_from_name(const std::string& name) {
+  for (int i = 0; i <= static_cast<int>(StopReason::interrupted); ++i)
+    if (stop_reason_name(static_cast<StopReason>(i)) == name) return static_cast<StopReason>(i);
+  throw Error("unknown stop reason '" + name + "'");
 }
 
 StopReason StopCriterion::test(int it, double r, double r0, double floor, bool finite) const {

@@ -26,6 +26,8 @@ enum class StopReason {
 
 // "converged", "rounding_floor", ... (the recorded names).
 std::string stop_reason_name(StopReason r);
+// The reason of a recorded name; throws xb::Error for a name that is none.
+StopReason stop_reason_from_name(const std::string& name);
 
 // The one success predicate: the substep's solution is found to the precision that exists
 // (converged, or ‖∇E‖ at its rounding floor). A line search that failed near the floor is not one.

@@ -136,16 +136,21 @@ def test_summary_and_readme_table(tmp_path):
     assert sc.pair_best("s")[("newton", "mgpbd")]["forcing"] == "eisenstat_walker"
     text = race.summary([sc])
     head = text[text.index("## Each outer method"):text.index("## squash")]
-    assert "| squash s (100) | 0.01 | — (0.29) | 0.67 (mgpbd (EW)) |" in head, head
-    assert "| squash s (100) | 0.0001 | — (0.29) | 1.00 (mgpbd (EW)) |" in head, head
-    assert "| squash m (400) | 0.01 | — (reference unconverged) | — (failed) |" in head, head
+    # One row per size; each cell the time to every threshold, the linear method once.
+    assert "| squash s (100) | — (0.29) | 0.67 / 1.00 (mgpbd (EW)) |" in head, head
+    assert "| squash m (400) | — (reference unconverged) | — (failed) |" in head, head
     medium_text = text[text.index("### m"):]
     assert "failed (exit 137: Killed)" in medium_text and "max_iterations at ‖∇E‖" in medium_text
     readme = tmp_path / "README.md"
     readme.write_text(f"intro\n{race.README_BEGIN}\nold table\n{race.README_END}\nrest\n")
     race.write_readme(str(readme), [sc])
     new = readme.read_text()
-    assert "old table" not in new and "| squash s (100) | 0.01 |" in new and new.endswith(f"{race.README_END}\nrest\n")
+    assert "old table" not in new and "| squash s (100) | — (0.29) |" in new and new.endswith(f"{race.README_END}\nrest\n")
+    # Different linear methods at different thresholds are named per threshold.
+    mixed = [entry("newton", "cholmod", "fixed", fake(errors=(1, 5e-3, 4e-3, 4e-3), wall=0.3)),
+             entry("newton", "mgpbd", "fixed", fake(errors=(1, 0.5, 0.1, 1e-5), wall=3.0))]
+    line = race.outer_cell(race.Scene("squash", {"s": mixed}, SPEC), "s", "newton")
+    assert line == "0.10 (cholmod) / 3.00 (mgpbd)", line
 
 
 def test_a_small_race_end_to_end(bench, tmp_path):
@@ -184,13 +189,19 @@ sizes = [ { label = "r2" } ]
     done = subprocess.run([sys.executable, os.path.join(ROOT, "figures", "race.py"), "--bench", bench, "--spec", str(spec),
                            "--out", str(out), "--quick", "--quiet"], capture_output=True, text=True, timeout=400)
     assert done.returncode == 0, done.stdout + done.stderr
-    cmds = [line for line in done.stdout.splitlines() if line.startswith("race: ") and " run " in line]
-    assert cmds and all("--reference" in c for c in cmds)
+    every = [line for line in done.stdout.splitlines() if line.startswith("race: ") and " run " in line]
+    # The size's reference pass first (one sweep), then the entries, every one reading its file.
+    assert "--solver xpbd-jacobi" in every[0] and "--set max_iterations=1" in every[0]
+    cmds = every[1:]
+    ref = str(out / "data" / "bar" / "r2" / "_reference" / "reference.h5")
+    assert cmds and all(f"--reference-file {ref}" in c and "--memory-limit" in c for c in every)
     assert "--set max_iterations=8" in cmds[0] and "cholmod" in cmds[0]  # the anchor first, at overrun × 4
     newton = [c for c in cmds if "--profile newton" in c]
     assert len(newton) == 3 and not any("rtol=" in c or "max_iterations=" in c for c in newton)
     assert not any("xpbd-gs" in c and "--profile" in c for c in cmds)  # a sweep runs only under XPBD
     summary = (out / "summary.md").read_text()
     assert "| Newton | cholmod | fixed |" in summary and "converged, certified: error ≤" in summary
+    assert "reference computed once" in summary and "5 of 5 entries read the size's stored reference" in summary
+    assert (out / "plan.txt").exists() and "plan:" in done.stdout
     assert "| XPBD | broken | fixed |" in summary and "failed (exit" in summary
     assert (out / "race_bar.png").exists() and (out / "timings.tsv").exists()

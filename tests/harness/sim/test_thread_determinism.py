@@ -51,6 +51,7 @@ EXCLUDED = {
     "created": "the UTC date and time of the run",
     # the machine's state and the thread count, which is what the test varies
     "load_average": "the 1-minute load at the process's start",
+    "peak_memory": "bytes, the process's largest resident set: each thread has its own stack and arena",
     "omp_threads": "OpenMP's thread count: what the test varies",
 }
 
