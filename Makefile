@@ -41,13 +41,13 @@ figures: build
 	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
 # The race on the truth (figures/race/race.toml, docs/race.md): outer methods (XPBD, its two
-# variants, Newton) x linear methods, one process per run, each with --reference; the time to a
+# variants, Newton; VBD and AVBD with their own sweeps, docs/vbd.md) x linear methods, one process per run, each with --reference; the time to a
 # position error of 1e-2 and 1e-4 against the backward-Euler solution, into plots/race/
 # (race_<scene>.png, summary.md, timings.tsv). `race`: one size per scene (the spec's quick_size)
 # and Eisenstat-Walker only (10-20 minutes on a quiet 2-core machine, references included);
 # `race-full`: every size and forcing rule (squash to 850K tets: hours). Both resume (finished runs
 # are kept); RACE_ARGS="--fresh", "--only squash", "--outer newton", "--linear mgpbd,cholmod".
-# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md
+# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md --pick docs/vbd.md
 RACE_ARGS ?=
 race: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --quick $(RACE_ARGS)

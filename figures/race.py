@@ -172,6 +172,8 @@ def entries(spec, forcing_rules, outers=None, linears=None):
         for name, m in spec["linear"].items():
             if ((outers and o not in outers) or (linears and name not in linears)) and (o, name) != rules.ANCHOR:
                 continue
+            if spec["outer"][o].get("local_only") and not m.get("local"):
+                continue  # block descent: no linear step to take
             if m.get("local"):
                 if o in m.get("outer", ["xpbd"]):
                     out.append((o, name, "none"))
@@ -248,6 +250,9 @@ def check_spec(bench, spec):
             bad.append(f"linear.{name}: unknown solver {m.get('solver')!r}")
         bad += [f"linear.{name}: unknown key {k!r}" for k in m.get("set", {}) if k not in names["keys"]]
         bad += [f"linear.{name}: unknown outer method {k!r}" for k in m.get("outer", []) if k not in spec["outer"]]
+    for p in spec.get("pick", {}).get("entries", []):
+        if p.get("outer") not in spec["outer"] or p.get("linear") not in spec["linear"]:
+            bad.append(f"pick: entry {p.get('outer')!r} + {p.get('linear')!r} is not an outer and a linear method of the spec")
     for name, sc in spec["scenes"].items():
         if sc.get("scene") not in names["scenes"]:
             bad.append(f"scenes.{name}: unknown scene {sc.get('scene')!r}")

@@ -32,7 +32,7 @@ const ResultsSchema& results_schema() {
           {"any", "number", {"rows"}},
           {"simulation", "string", {"profile", "reference_method", "sweep_spec", "sweep_description", "sweep_params", "sweep_point", "sweep_key", "sweep_base"}},
           {"simulation", "int", {"outer_iterations", "substeps_total", "substeps_converged", "reference", "reference_substeps_unconverged", "sweep_index", "sweep_repeat"}},
-          {"simulation", "float", {"final_dual_residual", "relative_dual_residual", "final_authors_dual_residual", "wall_time", "nonzeros", "particles", "colors", "jacobi_relaxation_used", "authors_skipped_last_sweep", "time_budget", "reference_dual_residual", "reference_time", "final_position_error", "final_newton_residual", "final_relative_newton_residual", "reference_energy_gradient", "line_search_failures", "substeps_rounding_floor"}},
+          {"simulation", "float", {"final_dual_residual", "relative_dual_residual", "final_authors_dual_residual", "wall_time", "nonzeros", "particles", "colors", "jacobi_relaxation_used", "authors_skipped_last_sweep", "time_budget", "reference_dual_residual", "reference_time", "final_position_error", "final_newton_residual", "final_relative_newton_residual", "reference_energy_gradient", "line_search_failures", "substeps_rounding_floor", "skipped_vertices", "avbd_kappa_max", "avbd_kappa_median", "ground_contacts"}},
           // The measure each run's stop test read and where it ended (harness/io/run_record.cpp).
           {"simulation", "string", {"convergence_measure"}},
           {"simulation", "float", {"final_convergence", "final_relative_convergence"}},

@@ -28,7 +28,10 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
     res_.reference_method = reference_->description();
     res_.reference_time += ref_clock.seconds();
   }
-  if (find_method(method)->local) {
+  if (find_method(method)->block_descent) {
+    block_.emplace(prob_, ds_, p, method, alpha_tilde_, h_);
+    res_.form_used = "none";
+  } else if (find_method(method)->local) {
     local_.emplace(prob_, ds_, p.xpbd, local_kind(method));
     res_.form_used = "none";
   } else {
@@ -42,6 +45,18 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
 
 // The outer-method keys a method cannot take: one message naming the key (docs/newton.md).
 void Simulation::check_combination(const std::string& method) const {
+  check_block_descent_keys(p_.block_descent, method);
+  if (find_method(method)->block_descent) {
+    auto refuse = [&](const std::string& what) {
+      throw Error("solver '" + method + "' is block descent on E with its own outer loop: " + what + " is XPBD's or Newton's");
+    };
+    if (p_.step != "fixed") refuse("step=" + p_.step);
+    if (p_.geometric_stiffness != "none") refuse("xpbd.geometric_stiffness=" + p_.geometric_stiffness);
+    if (p_.primal_residual != "zero") refuse("xpbd.primal_residual=" + p_.primal_residual);
+    if (p_.hessian_projection != "clamp") refuse("xpbd.hessian_projection=" + p_.hessian_projection + " (vbd.projection is VBD's)");
+    if (p_.residual_metric != "true") refuse("residual_metric=" + p_.residual_metric + " (it stops on |grad E|)");
+    return;
+  }
   const bool local = find_method(method)->local;
   auto refuse = [&](const std::string& what) {
     throw Error("solver '" + method + "' is a local XPBD sweep: " + what +
@@ -109,6 +124,7 @@ void Simulation::substep(int frame, int sub) {
   Particles& P = prob_.particles;
   sub_clock_.reset();
   x_old_ = P.x;
+  v_old_ = P.v;
   for (int i = 0; i < P.size(); ++i)
     if (P.w[i] > 0) P.v.col(i) += h_ * prob_.gravity;
   x_pred_ = P.x + h_ * P.v;
@@ -132,12 +148,14 @@ void Simulation::substep(int frame, int sub) {
   ++res_.substeps_total;
   if (newton_) {
     newton_substep(frame, sub);
+  } else if (block_) {
+    block_descent_substep(frame, sub);
   } else {
     xpbd_substep(frame, sub);
   }
   res_.reference_time += excluded_;
   if (stop_) return;
-  project_onto_planes(prob_, P.x);
+  if (!block_) project_onto_planes(prob_, P.x);  // block descent has the ground in its own energy
   P.v = (P.x - x_old_) / h_;
   if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
 }
@@ -210,6 +228,8 @@ void Simulation::finish() {
   }
   if (local_)
     for (const auto& [key, value] : local_->statistics()) res_.stats[key] = value;
+  if (block_)
+    for (const auto& [key, value] : block_->statistics()) res_.stats[key] = value;
   // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
   // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
   if (stability_.has_tets()) res_.arrays["inverted_tets"] = stability_.inverted_tets();
@@ -226,10 +246,8 @@ void Simulation::finish() {
     res_.stats["primal_rows"] = global_->primal()->system().rows();
     res_.stats["primal_nonzeros"] = static_cast<double>(global_->primal()->system().K().nonZeros());
   }
-  if (newton_) {
-    res_.stats["line_search_failures"] = search_failures_;
-    res_.stats["substeps_rounding_floor"] = rounding_floor_;
-  }
+  if (newton_) res_.stats["line_search_failures"] = search_failures_;
+  if (newton_ || block_) res_.stats["substeps_rounding_floor"] = rounding_floor_;
   res_.stats["particles"] = prob_.particles.size();
   res_.final_positions = prob_.particles.x;
 }

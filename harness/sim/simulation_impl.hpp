@@ -3,6 +3,7 @@
 // evaluation, the method step, Newton's line search). Not for use elsewhere.
 #pragma once
 
+#include "block_descent.hpp"
 #include "global_step.hpp"
 #include "forcing.hpp"
 #include "newton_loop.hpp"
@@ -49,6 +50,8 @@ class Simulation {
   // The outer loop of step = newton: the one Newton loop (newton_loop.hpp) with the stepper's hooks.
   void newton_substep(int frame, int sub);
   void xpbd_substep(int frame, int sub);
+  // The outer loop of vbd and avbd: the block-descent loop (block_descent.hpp) with the stepper's hooks.
+  void block_descent_substep(int frame, int sub);
   // Logs the state at iteration `it` (XPBD's methods: evaluates it); returns the residuals.
   Residuals log_state(int frame, int sub, int it, const LastStep& last);
   void log_entry(int frame, int sub, int it, const Entry& e, const LastStep& last);
@@ -83,11 +86,12 @@ class Simulation {
   std::optional<GlobalStep> global_;
   std::optional<NewtonLoop> newton_loop_;  // step = newton
   std::optional<LocalMethod> local_;
+  std::optional<BlockDescentLoop> block_;  // vbd, avbd
   LinearSolver* active_ = nullptr;
   std::optional<ReferenceSolver> reference_;
   StabilityMonitor stability_;
   ForcingRule forcing_;
-  Eigen::Matrix3Xd x_pred_, x_old_, dx_, g_, x_ref_;
+  Eigen::Matrix3Xd x_pred_, x_old_, v_old_, dx_, g_, x_ref_;  // v_old_: before gravity's kick
   double ref_scale_ = 0;  // ‖x_ref − x̃‖_M
   double excluded_ = 0;   // s of the substep spent on the reference and the error, taken off every clock
   double r0_ = 0, stop0_ = 0, newton0_ = 0;  // the substep's first dual, stop and Newton residuals

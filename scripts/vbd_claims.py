@@ -1,0 +1,145 @@
+#!/usr/bin/env python3
+"""The block-descent methods (docs/vbd.md) on the truth: every stock scene and the near-rigid
+variants, VBD (plain and Chebyshev) and AVBD with `--reference`, each substep's iterations to a
+position error of 1e-2 and 1e-3, the smallest error reached, how the substep ended; a table per claim.
+
+usage: python3 scripts/vbd_claims.py scenes | rigid | tune [--bench build/xpbd-bench] [--out DIR]
+                                     [--iterations N] [--set KEY=VALUE ...] [--only SCENE,...]
+
+scenes  every stock scene (problems/scenes/, their own frames but at most --frames), rtol = atol = 0
+        and --iterations sweeps per substep (the fixed-iteration frame), vbd, vbd with Chebyshev, avbd
+rigid   heavy_rope, pendulum, mass_chain and their mu1e12 variants (and the rigid variants for avbd)
+tune    avbd on the near-rigid set over avbd.beta x avbd.stiffness_start (how the defaults were chosen)
+
+Each (scene, variant) is one `xpbd-bench run` into OUT/<claim>/<scene>_<variant>.h5 (an existing
+file is reused; --fresh starts over); the table goes to stdout with the 1-min load at the start.
+Counts, not times, are the result: the machine's load changes times, not iterations.
+"""
+import argparse
+import os
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+STOCK = ["cloth_hang", "bar_hang", "cantilever", "squash", "twist_bar", "ball_drop", "mass_chain", "heavy_rope",
+         "pendulum"]
+NEAR_RIGID = ["heavy_rope", "pendulum", "mass_chain"]
+FRAMES = {"ball_drop": 12}  # the ball lands in frame 9: its contact frames
+METHODS = {"vbd": ["--solver", "vbd"], "vbd-chebyshev": ["--solver", "vbd", "--set", "vbd.acceleration=chebyshev"],
+           "avbd": ["--solver", "avbd"]}
+
+
+def run(args, path, scene, method, sets):
+    if args.fresh and os.path.exists(path):
+        os.remove(path)
+    if not os.path.exists(path):
+        cmd = [args.bench, "run", "--scene", scene, *METHODS[method], "--reference", "--quiet", "--out", path]
+        for s in sets + args.set:
+            cmd += ["--set", s]
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if done.returncode != 0 or not os.path.exists(path):
+            return None, done.stderr.strip()[-300:]
+    with h5py.File(path, "r") as f:
+        g = next(iter(f["runs"].values()))
+        return {k: g[k][()] for k in ("frame", "substep", "iteration", "position_error", "substep_status",
+                                       "wall_time") if k in g} | {"@" + k: v for k, v in g.attrs.items()}, ""
+
+
+def substeps(r):
+    """Per substep: (iterations, its to 1e-2, its to 1e-3, smallest error, last error, how it ended)."""
+    fr, sb, it, pe = (np.asarray(r[k]) for k in ("frame", "substep", "iteration", "position_error"))
+    status = [s.decode() if isinstance(s, bytes) else str(s) for s in r.get("substep_status", [])]
+    out = []
+    for k, key in enumerate(sorted(set(zip(fr.tolist(), sb.tolist())))):
+        m = (fr == key[0]) & (sb == key[1])
+        e = pe[m]
+
+        def first(t):
+            hit = np.flatnonzero(e <= t)
+            return int(it[m][hit[0]]) if len(hit) else None
+        out.append((int(it[m][-1]), first(1e-2), first(1e-3), float(e.min()), float(e[-1]),
+                    status[k] if k < len(status) else "-"))
+    return out
+
+
+def fmt(v):
+    return "—" if v is None else (f"{v:.2e}" if isinstance(v, float) else str(v))
+
+
+def summarise(label, r, why):
+    """One table row: the run's status, and over its substeps (moving ones: the reference moved)."""
+    if r is None:
+        return f"| {label} | failed: {why} | | | | | |"
+    ss = substeps(r)
+    reached2 = [s[1] for s in ss if s[1] is not None]
+    reached3 = [s[2] for s in ss if s[2] is not None]
+    worst_end = max(s[4] for s in ss) if ss else float("nan")
+    return (f"| {label} | {r['@status']} | {len(ss)} | {len(reached3)} of {len(ss)} | "
+            f"{fmt(max(reached2) if reached2 else None)} / {fmt(max(reached3) if reached3 else None)} | "
+            f"{worst_end:.2e} | {float(r['@wall_time']):.2f} |")
+
+
+HEAD = ["| scene, method | status | substeps | substeps reaching 1e-3 | worst its to 1e-2 / 1e-3 | worst final error | wall s |",
+        "|---|---|---|---|---|---|---|"]
+
+
+def scenes(args):
+    print(f"# stock scenes, {args.iterations} sweeps per substep, rtol = atol = 0; load {os.getloadavg()[0]:.2f}")
+    print("\n".join(HEAD))
+    for scene in [s for s in STOCK if not args.only or s in args.only.split(",")]:
+        for method in METHODS:
+            sets = ["rtol=0", "atol=0", f"max_iterations={args.iterations}", f"frames={FRAMES.get(scene, args.frames)}"]
+            r, why = run(args, os.path.join(args.out, "scenes", f"{scene}.{method}.h5"), scene, method, sets)
+            print(summarise(f"{scene}, {method}", r, why), flush=True)
+
+
+def rigid(args):
+    print(f"# near-rigid scenes, rtol = 1e-10 on |grad E|, at most {args.iterations} sweeps; load {os.getloadavg()[0]:.2f}")
+    print("\n".join(HEAD))
+    for scene in NEAR_RIGID:
+        for variant in ("none", "mu1e12", "rigid"):
+            for method in METHODS:
+                if variant == "rigid" and method != "avbd":
+                    continue  # E has no term for a rigid constraint
+                sets = ["rtol=1e-10", "atol=0", f"max_iterations={args.iterations}", f"frames={args.frames}",
+                        f"variant={variant}"]
+                r, why = run(args, os.path.join(args.out, "rigid", f"{scene}_{variant}.{method}.h5"), scene, method, sets)
+                print(summarise(f"{scene} {variant}, {method}", r, why), flush=True)
+
+
+def tune(args):
+    print(f"# avbd over beta x stiffness_start, near-rigid set; load {os.getloadavg()[0]:.2f}")
+    print("\n".join(HEAD))
+    for beta in ("1e2", "1e3", "1e4", "1e5"):
+        for start in ("1", "10", "100", "1000"):
+            for scene, variant in (("heavy_rope", "none"), ("heavy_rope", "mu1e12"), ("pendulum", "none"),
+                                   ("mass_chain", "none")):
+                sets = ["rtol=1e-10", "atol=0", f"max_iterations={args.iterations}", f"frames={args.frames}",
+                        f"variant={variant}", f"avbd.beta={beta}", f"avbd.stiffness_start={start}"]
+                path = os.path.join(args.out, "tune", f"{scene}_{variant}_b{beta}_k{start}.h5")
+                r, why = run(args, path, scene, "avbd", sets)
+                print(summarise(f"{scene} {variant}, beta {beta}, start {start}", r, why), flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("claim", choices=["scenes", "rigid", "tune"])
+    ap.add_argument("--bench", default=os.path.join(ROOT, "build", "xpbd-bench"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "plots", "vbd_claims"))
+    ap.add_argument("--iterations", type=int, default=2000)
+    ap.add_argument("--frames", type=int, default=3)
+    ap.add_argument("--only", default="")
+    ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--fresh", action="store_true")
+    args = ap.parse_args()
+    if not os.access(args.bench, os.X_OK):
+        sys.exit(f"{args.bench}: not an executable (build first)")
+    {"scenes": scenes, "rigid": rigid, "tune": tune}[args.claim](args)
+
+
+if __name__ == "__main__":
+    main()
