@@ -26,11 +26,16 @@ build: setup
 	@$(PYTHON) scripts/link_python_package.py $(BUILD)
 
 # The paper's Fig. 8 scene: one-sweep XPBD stalls where the global solves converge; every global
-# method in both forms of its linear step (dual A dlambda = b, primal K dx = J^T alpha~^-1 b).
+# method in both forms of its linear step (dual A dlambda = b, primal K dx = J^T alpha~^-1 b). Then
+# on the truth (--reference): XPBD Gauss-Seidel, VBD and AVBD (400 sweeps) and Newton with CHOLMOD,
+# their position error against wall time (plots/demo_truth.png; docs/vbd.md).
 demo: build
 	@mkdir -p results plots
 	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-jacobi,xpbd-gs,jacobi-pcg,cholmod,mgpbd --form dual,primal --out results/demo.h5
 	$(PYTHON) plots/convergence.py results/demo.h5 -o plots/demo_convergence.png
+	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-gs,vbd,avbd --reference --set rtol=0 --set atol=0 --set max_iterations=400 --out results/demo_truth.h5
+	$(BUILD)/xpbd-bench run --scene cloth_hang --profile newton --solver cholmod --reference --out results/demo_truth.h5 --append
+	$(PYTHON) plots/error_time.py results/demo_truth.h5 -o plots/demo_truth.png
 
 # The paper's claims (figures/*.toml, one spec per figure; FIGURES_SIZE=paper applies each spec's
 # [sizes.paper] table): figures/run.py runs the sweeps into
@@ -47,7 +52,7 @@ figures: build
 # and Eisenstat-Walker only (10-20 minutes on a quiet 2-core machine, references included);
 # `race-full`: every size and forcing rule (squash to 850K tets: hours). Both resume (finished runs
 # are kept); RACE_ARGS="--fresh", "--only squash", "--outer newton", "--linear mgpbd,cholmod".
-# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md --pick docs/vbd.md
+# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md --pick docs/results/vbd_pick.md
 RACE_ARGS ?=
 race: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --quick $(RACE_ARGS)

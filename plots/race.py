@@ -2,7 +2,7 @@
 """The race's figures and summary (figures/race.py runs it; this redraws from its data).
 
 usage: python3 plots/race.py DATA_DIR [--out plots/race] [--spec figures/race/race.toml] [--readme README.md]
-                              [--pick docs/vbd.md]
+                              [--pick docs/results/vbd_pick.md]
 
 DATA_DIR holds <scene>/<size>/<outer>.<linear>.<forcing>.h5, one run each (with --reference), and a
 <outer>.<linear>.<forcing>.failed.json record for a run whose process left none. The rules (the
@@ -13,8 +13,8 @@ outer method, a panel per size, a line per linear method at its best forcing rul
 OUT/summary.md; a DATA_DIR/../timings.tsv is copied to OUT. --readme FILE: the headline table
 (time to each threshold of each outer method at its best) replaces the one between the race-table
 markers in FILE (README.md's), so that publishing a race is one command. --pick FILE: the spec's
-[pick] comparison ("XPBD, VBD, Newton: which to pick", plots/race_pick.py) between FILE's pick
-markers (docs/vbd.md's); summary.md has it too.
+[pick] comparison ("XPBD, VBD, Newton: which to pick", plots/race_pick.py) as a generated page
+(docs/results/vbd_pick.md); summary.md has it too.
 """
 import argparse
 import json
@@ -330,7 +330,7 @@ def draw(data_dir, out, spec, readme=None, pick=None):
     if readme:
         write_readme(readme, scenes)
     if pick:
-        race_pick.write(pick, scenes, spec)
+        race_pick.write(pick, scenes, spec, data_dir)
 
 
 def main():
@@ -340,7 +340,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(here, "race"))
     ap.add_argument("--spec", default=os.path.join(os.path.dirname(here), "figures", "race", "race.toml"))
     ap.add_argument("--readme", default=None, help="a file with the race-table markers (README.md)")
-    ap.add_argument("--pick", default=None, help="a file with the pick markers (docs/vbd.md)")
+    ap.add_argument("--pick", default=None, help="write the [pick] comparison as this generated page")
     args = ap.parse_args()
     with open(args.spec, "rb") as fh:
         spec = tomllib.load(fh)

@@ -3,18 +3,14 @@
 The spec's [pick] table names the entries to compare (outer and linear method, each at its best
 forcing rule) and the position error they race to; per scene and size this writes which reaches it
 first and by how much (the next one's time over the first's), or why none does. plots/race.py puts
-it into OUT/summary.md, and with --pick FILE between the pick markers of FILE (docs/vbd.md's), so
-that the text is never typed by hand.
+it into OUT/summary.md, and with --pick FILE writes it as a generated page of its own
+(docs/results/vbd_pick.md), so that the text is never typed by hand.
 """
 import math
 import os
 
 import race_rules as rules
 import xbruns
-
-BEGIN = "<!-- vbd pick: begin (python3 plots/race.py DATA --pick docs/vbd.md writes it) -->"
-END = "<!-- vbd pick: end -->"
-
 
 def _time(sc, s, outer, linear, threshold):
     """(seconds or None, why, entry) of the pair at its best forcing rule."""
@@ -73,16 +69,17 @@ def section(scenes, spec):
     return lines
 
 
-def write(path, scenes, spec):
-    """Replaces the lines between BEGIN and END in `path` with the section."""
-    with open(path) as fh:
-        text = fh.read()
-    if BEGIN not in text or END not in text:
-        raise SystemExit(f"{path}: no pick markers ({BEGIN} … {END})")
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    body = "\n".join(section(scenes, spec)) or "(the spec has no [pick] table)"
-    with open(path + ".tmp", "w") as fh:
-        fh.write(head + BEGIN + "\n" + body + "\n" + END + tail)
+def write(path, scenes, spec, data_dir):
+    """The section as a generated page of its own (pages.py's marker first: not hand-written docs)."""
+    import pages
+    title = spec.get("pick", {}).get("title", "Which to pick")
+    body = section(scenes, spec) or ["(the spec has no [pick] table)"]
+    cmd = f"python3 plots/race.py {os.path.relpath(data_dir)} --pick {os.path.relpath(path)}"
+    text = "\n".join([pages.marker("plots/race.py", os.path.relpath(data_dir)), f"# {title}", "",
+                      f"From the race's runs (`make race`, figures/race/race.toml's [pick]); reproduce: `{cmd}`.",
+                      ""] + body) + "\n"
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path + ".tmp", "w", encoding="utf-8") as fh:
+        fh.write(text)
     os.replace(path + ".tmp", path)
-    print(f"wrote the pick section into {path}")
+    print(f"wrote {path}")

@@ -4,7 +4,8 @@ variants, VBD (plain and Chebyshev) and AVBD with `--reference`, each substep's 
 position error of 1e-2 and 1e-3, the smallest error reached, how the substep ended; a table per claim.
 
 usage: python3 scripts/vbd_claims.py scenes | rigid | tune [--bench build/xpbd-bench] [--out DIR]
-                                     [--iterations N] [--set KEY=VALUE ...] [--only SCENE,...]
+                                     [--iterations N] [--frames N] [--set KEY=VALUE ...] [--only SCENE,...]
+                                     [--data docs/results/data/vbd_CLAIM.json]
 
 scenes  every stock scene (problems/scenes/, their own frames but at most --frames), rtol = atol = 0
         and --iterations sweeps per substep (the fixed-iteration frame), vbd, vbd with Chebyshev, avbd
@@ -13,7 +14,9 @@ tune    avbd on the near-rigid set over avbd.beta x avbd.stiffness_start (how th
 
 Each (scene, variant) is one `xpbd-bench run` into OUT/<claim>/<scene>_<variant>.h5 (an existing
 file is reused; --fresh starts over); the table goes to stdout with the 1-min load at the start.
-Counts, not times, are the result: the machine's load changes times, not iterations.
+Counts, not times, are the result: the machine's load changes times, not iterations. --data: the
+table as stamped data (plots/pages.py), which `python3 plots/pages.py publish FILE.json` makes a
+section of docs/results/vbd.md.
 """
 import argparse
 import os
@@ -24,6 +27,8 @@ import h5py
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+import pages  # noqa: E402
 STOCK = ["cloth_hang", "bar_hang", "cantilever", "squash", "twist_bar", "ball_drop", "mass_chain", "heavy_rope",
          "pendulum"]
 NEAR_RIGID = ["heavy_rope", "pendulum", "mass_chain"]
@@ -71,35 +76,38 @@ def fmt(v):
 
 
 def summarise(label, r, why):
-    """One table row: the run's status, and over its substeps (moving ones: the reference moved)."""
+    """One table row's cells: the run's status, and over its substeps."""
     if r is None:
-        return f"| {label} | failed: {why} | | | | | |"
+        return [label, f"failed: {why}", "", "", "", "", ""]
     ss = substeps(r)
     reached2 = [s[1] for s in ss if s[1] is not None]
     reached3 = [s[2] for s in ss if s[2] is not None]
     worst_end = max(s[4] for s in ss) if ss else float("nan")
-    return (f"| {label} | {r['@status']} | {len(ss)} | {len(reached3)} of {len(ss)} | "
-            f"{fmt(max(reached2) if reached2 else None)} / {fmt(max(reached3) if reached3 else None)} | "
-            f"{worst_end:.2e} | {float(r['@wall_time']):.2f} |")
+    ends = sorted({s[5] for s in ss})
+    return [label, f"{r['@status']} ({', '.join(ends)})", len(ss), f"{len(reached3)} of {len(ss)}",
+            f"{fmt(max(reached2) if reached2 else None)} / {fmt(max(reached3) if reached3 else None)}",
+            f"{worst_end:.2e}", f"{float(r['@wall_time']):.2f}"]
 
 
-HEAD = ["| scene, method | status | substeps | substeps reaching 1e-3 | worst its to 1e-2 / 1e-3 | worst final error | wall s |",
-        "|---|---|---|---|---|---|---|"]
+COLUMNS = ["scene, method", "status (substeps' ends)", "substeps", "substeps reaching 1e-3",
+           "worst its to 1e-2 / 1e-3", "worst final error", "wall s"]
 
 
 def scenes(args):
-    print(f"# stock scenes, {args.iterations} sweeps per substep, rtol = atol = 0; load {os.getloadavg()[0]:.2f}")
-    print("\n".join(HEAD))
+    t = pages.Table(COLUMNS)
     for scene in [s for s in STOCK if not args.only or s in args.only.split(",")]:
         for method in METHODS:
             sets = ["rtol=0", "atol=0", f"max_iterations={args.iterations}", f"frames={FRAMES.get(scene, args.frames)}"]
             r, why = run(args, os.path.join(args.out, "scenes", f"{scene}.{method}.h5"), scene, method, sets)
-            print(summarise(f"{scene}, {method}", r, why), flush=True)
+            t.row(summarise(f"{scene}, {method}", r, why))
+    return t, (f"Every stock scene with its own settings, --reference, rtol = atol = 0 and {args.iterations} sweeps per "
+               f"substep (the fixed-iteration frame), the first {args.frames} frames (ball_drop: {FRAMES['ball_drop']}, "
+               "its contact frames); per substep the sweeps to a position error of 1e-2 and 1e-3 (the worst substep's), "
+               "the worst error at the end. A substep ends early only at ‖∇E‖'s rounding floor.")
 
 
 def rigid(args):
-    print(f"# near-rigid scenes, rtol = 1e-10 on |grad E|, at most {args.iterations} sweeps; load {os.getloadavg()[0]:.2f}")
-    print("\n".join(HEAD))
+    t = pages.Table(COLUMNS)
     for scene in NEAR_RIGID:
         for variant in ("none", "mu1e12", "rigid"):
             for method in METHODS:
@@ -108,12 +116,14 @@ def rigid(args):
                 sets = ["rtol=1e-10", "atol=0", f"max_iterations={args.iterations}", f"frames={args.frames}",
                         f"variant={variant}"]
                 r, why = run(args, os.path.join(args.out, "rigid", f"{scene}_{variant}.{method}.h5"), scene, method, sets)
-                print(summarise(f"{scene} {variant}, {method}", r, why), flush=True)
+                t.row(summarise(f"{scene} {variant}, {method}", r, why))
+    return t, (f"The near-rigid chains and their variants (mu1e12: compliance 1e-12; rigid: 0, avbd only, against "
+               f"XPBD's fixed point), --reference, rtol = 1e-10 on ‖∇E‖, at most {args.iterations} sweeps per substep, "
+               f"the first {args.frames} frames.")
 
 
 def tune(args):
-    print(f"# avbd over beta x stiffness_start, near-rigid set; load {os.getloadavg()[0]:.2f}")
-    print("\n".join(HEAD))
+    t = pages.Table(COLUMNS)
     for beta in ("1e2", "1e3", "1e4", "1e5"):
         for start in ("1", "10", "100", "1000"):
             for scene, variant in (("heavy_rope", "none"), ("heavy_rope", "mu1e12"), ("pendulum", "none"),
@@ -122,7 +132,12 @@ def tune(args):
                         f"variant={variant}", f"avbd.beta={beta}", f"avbd.stiffness_start={start}"]
                 path = os.path.join(args.out, "tune", f"{scene}_{variant}_b{beta}_k{start}.h5")
                 r, why = run(args, path, scene, "avbd", sets)
-                print(summarise(f"{scene} {variant}, beta {beta}, start {start}", r, why), flush=True)
+                t.row(summarise(f"{scene} {variant}, beta {beta}, start {start}", r, why))
+    return t, ("avbd over avbd.beta × avbd.stiffness_start on the near-rigid chains, rtol = 1e-10, "
+               f"at most {args.iterations} sweeps, {args.frames} frames: how the defaults were chosen.")
+
+
+TITLES = {"scenes": "Every stock scene", "rigid": "The near-rigid chains", "tune": "AVBD's ramp and start"}
 
 
 def main():
@@ -135,10 +150,17 @@ def main():
     ap.add_argument("--only", default="")
     ap.add_argument("--set", action="append", default=[])
     ap.add_argument("--fresh", action="store_true")
+    ap.add_argument("--data", default="", help="write the table as stamped data for plots/pages.py")
     args = ap.parse_args()
     if not os.access(args.bench, os.X_OK):
         sys.exit(f"{args.bench}: not an executable (build first)")
-    {"scenes": scenes, "rigid": rigid, "tune": tune}[args.claim](args)
+    stamp = pages.stamp("python3 scripts/vbd_claims.py " + " ".join(sys.argv[1:]),
+                        microbench=os.path.join(os.path.dirname(args.bench), "xb_microbench")) if args.data else None
+    print(f"# {TITLES[args.claim]}; 1-min load {os.getloadavg()[0]:.2f}", flush=True)
+    t, text = {"scenes": scenes, "rigid": rigid, "tune": tune}[args.claim](args)
+    if args.data:
+        pages.write_data(args.data, "vbd", "VBD and AVBD on the truth: the tables", TITLES[args.claim], stamp, [t.data()],
+                         text, order=list(TITLES).index(args.claim))
 
 
 if __name__ == "__main__":
