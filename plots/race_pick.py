@@ -19,7 +19,8 @@ def _time(sc, s, outer, linear, threshold):
         return None, "not run", None
     t, why = rules.verdict(e["run"], threshold)
     if t is None and why == rules.NEVER:
-        why = f"never; smallest error {xbruns.fmt(rules.smallest_error(e['run']))}"
+        its = e["run"]["attrs"].get("outer_iterations", "?")
+        why = f"never in {its} its; smallest error {xbruns.fmt(rules.smallest_error(e['run']))}"
     return t, why, e
 
 
@@ -54,9 +55,12 @@ def section(scenes, spec):
     lines = [f"Time (s) within the frame to a position error of {threshold:g} against the backward-Euler solution "
              "(the race's rules: docs/race.md), each entry at its best forcing rule; — (why): never within its "
              "run, or nothing to time against.", ""]
+    cpus = sorted({int(float(a["cpu_count"])) for a in runs if "cpu_count" in a})
     if made:
+        busy = loads and cpus and max(loads) > min(cpus)
         lines += [f"Race runs made {made[0]} – {made[-1]}; 1-min load at their start "
-                  + (f"{min(loads):.2f}–{max(loads):.2f}." if loads else "unknown."), ""]
+                  + (f"{min(loads):.2f}–{max(loads):.2f}" if loads else "unknown") + f" on {'/'.join(map(str, cpus)) or '?'} CPUs"
+                  + (": a busy machine, whose times are not a quiet one's (fewer sweeps fit a budget)." if busy else "."), ""]
     lines += ["| scene, size | " + " | ".join(labels) + " | which first, by how much |",
               "|---|" + "---|" * (len(labels) + 1)]
     for sc in scenes:
@@ -76,8 +80,10 @@ def write(path, scenes, spec, data_dir):
     body = section(scenes, spec) or ["(the spec has no [pick] table)"]
     cmd = f"python3 plots/race.py {os.path.relpath(data_dir)} --pick {os.path.relpath(path)}"
     text = "\n".join([pages.marker("plots/race.py", os.path.relpath(data_dir)), f"# {title}", "",
-                      f"From the race's runs (`make race`, figures/race/race.toml's [pick]); reproduce: `{cmd}`.",
-                      ""] + body) + "\n"
+                      "From the race's runs (`make race`, or the part of it these entries need: `python3 figures/race.py "
+                      "--quick --only cloth_hang,squash --outer xpbd,vbd,avbd,newton --linear "
+                      "xpbd-gs,vbd,vbd-chebyshev,avbd,mgpbd`; the comparison: figures/race/race.toml's [pick]); this "
+                      f"page: `{cmd}`. A sweep entry runs until its time budget (docs/race.md).", ""] + body) + "\n"
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     with open(path + ".tmp", "w", encoding="utf-8") as fh:
         fh.write(text)
