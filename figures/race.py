@@ -53,7 +53,7 @@ import race as race_plots  # noqa: E402
 import race_plan as plan  # noqa: E402
 import race_rules as rules  # noqa: E402
 import xbruns  # noqa: E402
-from race_spec import (OWN, check_spec, entries, entry_sets, frame_iterations, linear_of,  # noqa: E402,F401
+from race_spec import (check_spec, entries, entry_sets, frame_iterations,  # noqa: E402,F401
                        reference_sets, set_args, sets_of, size_indices, LOCAL_MAX_ITERATIONS, STOP_KEYS)
 
 # Flags every run gets: --quiet when the race is (no live status line from xpbd-bench run).
@@ -236,7 +236,7 @@ def command(args, spec, e, state, budget_s, limit_gb):
               *(["--load-state", state] if state else [])]
     if e.outer == plan.REFERENCE:
         return ["run", "--scene", scene["scene"], "--solver", "xpbd-jacobi", *common, *set_args(reference_sets(scene, e.size))]
-    o, m = spec["outer"][e.outer], linear_of(spec, e.outer, e.linear)
+    o, m = spec["outer"][e.outer], spec["linear"][e.linear]
     return ["run", "--scene", scene["scene"], "--solver", m["solver"], *common,
             *(["--profile", o["profile"]] if o.get("profile") else []),
             *set_args(entry_sets(spec, scene, e.size, e.outer, e.linear, e.forcing))]

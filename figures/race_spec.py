@@ -12,7 +12,6 @@ import race_rules as rules  # noqa: E402
 
 LOCAL_MAX_ITERATIONS = 100000  # a sweep method stops on its time budget, not on a count
 STOP_KEYS = ("rtol", "atol", "max_iterations")  # an own_stop outer method keeps its profile's
-OWN = "own"  # the linear name of an outer method that is a solver of its own (`solver` in its table)
 
 
 def sets_of(*tables):
@@ -29,11 +28,6 @@ def set_args(sets):
     return args
 
 
-def linear_of(spec, outer, linear):
-    """The linear method's table; an outer method with a solver of its own is its own."""
-    return {"solver": spec["outer"][outer]["solver"]} if linear == OWN else spec["linear"][linear]
-
-
 def frame_iterations(scene, size):
     return int(sets_of(scene.get("set"), size.get("set")).get("max_iterations", 100))
 
@@ -43,7 +37,7 @@ def entry_sets(spec, scene, size, outer, linear, forcing):
     method's and the scene's own for that linear method (`linear_set`). XPBD's outer methods run
     `overrun` times the frame's outer iterations; an own_stop one (Newton) keeps its profile's stop
     test; a sweep runs until its time budget."""
-    o, m = spec["outer"][outer], linear_of(spec, outer, linear)
+    o, m = spec["outer"][outer], spec["linear"][linear]
     sets = sets_of(scene.get("set"), size.get("set"), o.get("set"), m.get("set"), scene.get("linear_set", {}).get(linear))
     if forcing not in ("none",):
         sets["linear.forcing"] = forcing
@@ -72,13 +66,11 @@ def entries(spec, forcing_rules, outers=None, linears=None):
     """(outer, linear, forcing) of every entry, the anchor first (always: it bounds the others)."""
     out = []
     for o, table in spec["outer"].items():
-        if table.get("solver"):  # a solver of its own (no linear method)
-            if not outers or o in outers:
-                out.append((o, OWN, "none"))
-            continue
         for name, m in spec["linear"].items():
             if ((outers and o not in outers) or (linears and name not in linears)) and (o, name) != rules.ANCHOR:
                 continue
+            if table.get("local_only") and not m.get("local"):
+                continue  # block descent: no linear step to take
             if m.get("local"):
                 if o in m.get("outer", ["xpbd"]):
                     out.append((o, name, "none"))
@@ -127,13 +119,14 @@ def check_spec(bench, spec):
         prof = o.get("profile")
         if prof and not os.path.exists(os.path.join(ROOT, "problems", "profiles", f"{prof}.toml")) and not os.path.exists(prof):
             bad.append(f"outer.{name}: unknown profile {prof!r}")
-        if o.get("solver") and o["solver"] not in names["solvers"]:
-            bad.append(f"outer.{name}: unknown solver {o['solver']!r}")
     for name, m in spec["linear"].items():
         if m.get("solver") not in names["solvers"]:
             bad.append(f"linear.{name}: unknown solver {m.get('solver')!r}")
         bad += [f"linear.{name}: unknown key {k!r}" for k in m.get("set", {}) if k not in names["keys"]]
         bad += [f"linear.{name}: unknown outer method {k!r}" for k in m.get("outer", []) if k not in spec["outer"]]
+    for p in spec.get("pick", {}).get("entries", []):
+        if p.get("outer") not in spec["outer"] or p.get("linear") not in spec["linear"]:
+            bad.append(f"pick: entry {p.get('outer')!r} + {p.get('linear')!r} is not an outer and a linear method of the spec")
     for name, sc in spec["scenes"].items():
         if sc.get("scene") not in names["scenes"]:
             bad.append(f"scenes.{name}: unknown scene {sc.get('scene')!r}")

@@ -234,8 +234,8 @@ def claim_sweeps(summary, files, notes, out):
             if failed(r):
                 summary.add(claim, f"{a['solver']}, {axis} = {fmt(float(a.get(axis)))}", "—", f"not run: {status_note(r)}")
                 continue
-            i2, t2 = xbruns.to_tolerance(r, 1e-2)
-            i4, t4 = xbruns.to_tolerance(r, 1e-4)
+            i2, t2 = xbruns.to_tolerance(r, 1e-2, metric="own")  # vbd, avbd: relative ‖∇E‖
+            i4, t4 = xbruns.to_tolerance(r, 1e-4, metric="own")
             summary.add(claim, f"{a['solver']}, {axis} = {fmt(float(a.get(axis)))}: its / time to 1e-2, to 1e-4 ({tets(r)} tets)",
                   "θ_s “small, e.g. 0.25”" if key == "theta" else "—",
                   f"{fmt(i2)} / {fmt(t2)} s, {fmt(i4)} / {fmt(t4)} s", status_note(r))

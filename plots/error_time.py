@@ -5,8 +5,9 @@ usage: python3 plots/error_time.py RESULTS.h5 [-o OUT.png] [--frame F] [--subste
                                    [--absolute]
 
 Left: the relative position error ||x - x_ref||_M / ||x_ref - x~||_M (dataset position_error,
-written by `run --reference` or `reference = true` in a sweep spec); right: the relative dual
-residual (--absolute: the dual residual). Both against wall time in seconds. By default one
+written by `run --reference` or `reference = true` in a sweep spec); right: each run's own stop
+measure, relative (the dual residual; ‖∇E‖ under Newton, vbd and avbd: xbruns.own_key), or with
+--absolute the dual residual. Both against wall time in seconds. By default one
 substep (frame 0, substep 0), whose clock starts at 0; --all concatenates every substep with a
 running clock. Runs without a reference get only the residual panel. Writes OUT (PNG) and a PDF.
 """
@@ -56,7 +57,8 @@ def main():
     a = ap.parse_args()
 
     runs = xbruns.load(a.results, datasets=("frame", "substep", "iteration", "dual_residual",
-                                            "relative_dual_residual", "wall_time", "position_error")
+                                            "relative_dual_residual", "authors_relative_dual_residual",
+                                            "relative_newton_residual", "wall_time", "position_error")
                        + xbruns.REFERENCE_DATASETS)
     runs = [r for r in runs if "dual_residual" in r["data"] and len(r["data"]["dual_residual"])]
     if not runs:
@@ -83,7 +85,7 @@ def main():
         if status not in ("ok", "max_iterations"):
             lab += f" [{status}]"
         judge = reference_floor(r, a) if "position_error" in r["data"] else None
-        res = np.asarray(r["data"]["dual_residual" if a.absolute else "relative_dual_residual"])[m]
+        res = np.asarray(r["data"]["dual_residual" if a.absolute else xbruns.own_key(r)])[m]
         line, = ax_res.loglog(np.maximum(t[m], 1e-6), np.maximum(res, ERROR_FLOOR), label=lab, lw=1.6)
         if ax_err is not None and "position_error" in r["data"]:
             e = np.asarray(r["data"]["position_error"])[m]
@@ -96,7 +98,7 @@ def main():
             if math.isfinite(floor):
                 ax_err.axhline(max(floor, ERROR_FLOOR), color=line.get_color(), lw=0.8, ls="--")
     ax_res.set_xlabel("wall time (s)")
-    ax_res.set_ylabel("dual residual" if a.absolute else "relative dual residual")
+    ax_res.set_ylabel("dual residual" if a.absolute else "relative stop measure (dual residual, or |grad E|)")
     ax_res.grid(True, which="both", alpha=0.3)
     if ax_err is not None:
         ax_err.set_xlabel("wall time (s)")

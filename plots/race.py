@@ -2,6 +2,7 @@
 """The race's figures and summary (figures/race.py runs it; this redraws from its data).
 
 usage: python3 plots/race.py DATA_DIR [--out plots/race] [--spec figures/race/race.toml] [--readme README.md]
+                              [--pick docs/results/vbd_pick.md]
 
 DATA_DIR holds <scene>/<size>/<outer>.<linear>.<forcing>.h5, one run each (with --reference), and a
 <outer>.<linear>.<forcing>.failed.json record for a run whose process left none. The rules (the
@@ -11,7 +12,9 @@ position error against the backward-Euler solution against wall time within the 
 outer method, a panel per size, a line per linear method at its best forcing rule) and writes
 OUT/summary.md; a DATA_DIR/../timings.tsv is copied to OUT. --readme FILE: the headline table
 (time to each threshold of each outer method at its best) replaces the one between the race-table
-markers in FILE (README.md's), so that publishing a race is one command.
+markers in FILE (README.md's), so that publishing a race is one command. --pick FILE: the spec's
+[pick] comparison ("XPBD, VBD, Newton: which to pick", plots/race_pick.py) as a generated page
+(docs/results/vbd_pick.md); summary.md has it too.
 """
 import argparse
 import json
@@ -24,6 +27,7 @@ import tomllib
 
 import numpy as np
 
+import race_pick
 import race_rules as rules
 import race_scaling
 import xbruns
@@ -323,11 +327,14 @@ RULES = ("Each entry (an outer method with a linear method and a forcing rule; E
          "reference's own error. Rules: plots/race_rules.py; spec: figures/race/race.toml.")
 
 
-def summary(scenes):
+def summary(scenes, spec=None):
     lines = ["# The race on the truth: time to a position error", "", RULES, "",
              "## Each outer method at its best", "",
              "Time (s) to each position error of each outer method's fastest entry (its linear method in brackets).", ""]
     lines += [provenance(scenes), ""] + headline(scenes) + [""]
+    pick = race_pick.section(scenes, spec or {})
+    if pick:
+        lines += ["## " + (spec["pick"].get("title", "Which to pick")), ""] + pick + [""]
     for sc in scenes:
         lines += [f"## {sc.name}", ""]
         for s in sc.order:
@@ -362,7 +369,7 @@ def write_readme(path, scenes):
     print(f"wrote the race table into {path}")
 
 
-def draw(data_dir, out, spec, readme=None):
+def draw(data_dir, out, spec, readme=None, pick=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -377,7 +384,7 @@ def draw(data_dir, out, spec, readme=None):
     for sc in scenes:
         draw_scene(plt, sc, out)
     with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write(summary(scenes))
+        fh.write(summary(scenes, spec))
     race_scaling.write(plt, scenes, data_dir, out)
     for name in ("timings.tsv", "plan.txt"):
         src = os.path.join(os.path.dirname(os.path.abspath(data_dir)), name)
@@ -386,6 +393,8 @@ def draw(data_dir, out, spec, readme=None):
     print(f"wrote {os.path.join(out, 'summary.md')}")
     if readme:
         write_readme(readme, scenes)
+    if pick:
+        race_pick.write(pick, scenes, spec, data_dir)
 
 
 def main():
@@ -395,10 +404,11 @@ def main():
     ap.add_argument("--out", default=os.path.join(here, "race"))
     ap.add_argument("--spec", default=os.path.join(os.path.dirname(here), "figures", "race", "race.toml"))
     ap.add_argument("--readme", default=None, help="a file with the race-table markers (README.md)")
+    ap.add_argument("--pick", default=None, help="write the [pick] comparison as this generated page")
     args = ap.parse_args()
     with open(args.spec, "rb") as fh:
         spec = tomllib.load(fh)
-    draw(args.data, args.out, spec, args.readme)
+    draw(args.data, args.out, spec, args.readme, args.pick)
 
 
 if __name__ == "__main__":

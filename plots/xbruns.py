@@ -271,12 +271,22 @@ def substep_mask(run, frame=None, substep=None):
     return m
 
 
+def own_key(run):
+    """The relative dataset of the measure the run's stop test read (attribute convergence_measure):
+    relative_newton_residual for energy_gradient (‖∇E‖ over its value at x̃: Newton, vbd, avbd),
+    else the relative dual residual it names (the true one for runs from before the attribute)."""
+    m = str(run["attrs"].get("convergence_measure", "dual_residual"))
+    return {"energy_gradient": "relative_newton_residual",
+            "authors_dual_residual": "authors_relative_dual_residual"}.get(m, "relative_dual_residual")
+
+
 def to_tolerance(run, tol, frame=0, substep=0, metric="true", after_first=False):
-    """(outer iterations, seconds) until the relative residual of `metric` is <= tol in one substep;
-    NaNs if never (or if the run has no such dataset). after_first: seconds counted from the end of
-    outer iteration 1, i.e. without the setup and the first iteration (the authors' timing)."""
+    """(outer iterations, seconds) until the relative residual of `metric` (true, authors, or own:
+    the run's own stop measure, own_key) is <= tol in one substep; NaNs if never (or if the run has
+    no such dataset). after_first: seconds counted from the end of outer iteration 1, i.e. without
+    the setup and the first iteration (the authors' timing)."""
     d = run["data"]
-    key = residual_key(metric, relative=True)
+    key = own_key(run) if metric == "own" else residual_key(metric, relative=True)
     if key not in d:
         return math.nan, math.nan
     m = substep_mask(run, frame, substep)

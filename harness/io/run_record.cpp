@@ -144,15 +144,15 @@ void add_newton_attributes(RunRecord& r, const IterationLog& L) {
     r.datasets["reference/relative_energy_gradient"] = L.reference_relative_energy_gradient;
   }
 }
-// The measure the run's stop test read (results/README.md): ‖∇E‖ under step = newton (its dual
+// The measure the run's stop test read (results/README.md): ‖∇E‖ under step = newton and vbd/avbd (its dual
 // residual is rounding over rounding there: λ = −α̃⁻¹C), else the dual residual `residual_metric`
 // names; its last value and that over the same substep's first, so `report` shows each run's own.
-void add_convergence_attributes(RunRecord& r, const Params& p, const IterationLog& L) {
+void add_convergence_attributes(RunRecord& r, const Params& p, bool block_descent, const IterationLog& L) {
   if (L.iteration.empty()) return;
   size_t first = L.iteration.size() - 1;
   while (first > 0 && L.iteration[first] != 0) --first;
   double last = 0, start = 0;
-  if (p.step == "newton") {  // g = h²∇E: ‖∇E‖ = ‖g‖/h², in N
+  if (p.step == "newton" || block_descent) {  // g = h²∇E: ‖∇E‖ = ‖g‖/h², in N
     const double h = p.dt / p.substeps;
     r.attrs["convergence_measure"] = std::string("energy_gradient");
     last = L.primal_residual.back() / (h * h);
@@ -224,7 +224,8 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.attrs["outer_iterations"] = res.outer_iterations;
   r.attrs["final_dual_residual"] = res.final_dual_residual;
   add_newton_attributes(r, res.log);
-  add_convergence_attributes(r, p, res.log);
+  const MethodInfo* info = find_method(method);
+  add_convergence_attributes(r, p, info && info->block_descent, res.log);
   r.attrs["relative_dual_residual"] = res.relative_dual_residual;
   r.attrs["wall_time"] = res.wall_time;
   r.attrs["substeps_total"] = static_cast<long long>(res.substeps_total);

@@ -31,7 +31,10 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
     res_.reference_file = opt.reference_file;
     res_.reference_method = truth_.store ? truth_.store->method() : reference_description(p, alpha_tilde_);
   }
-  if (find_method(method)->local) {
+  if (find_method(method)->block_descent) {
+    m_.block.emplace(prob_, ds_, p, method, alpha_tilde_, h_);
+    res_.form_used = "none";
+  } else if (find_method(method)->local) {
     m_.local.emplace(prob_, ds_, p.xpbd, local_kind(method));
     res_.form_used = "none";
   } else {
@@ -45,6 +48,18 @@ Simulation::Simulation(const Problem& prob, const Params& p, const std::string& 
 
 // The outer-method keys a method cannot take: one message naming the key (docs/newton.md).
 void Simulation::check_combination(const std::string& method) const {
+  check_block_descent_keys(p_.block_descent, method);
+  if (find_method(method)->block_descent) {
+    auto refuse = [&](const std::string& what) {
+      throw Error("solver '" + method + "' is block descent on E with its own outer loop: " + what + " is XPBD's or Newton's");
+    };
+    if (p_.step != "fixed") refuse("step=" + p_.step);
+    if (p_.geometric_stiffness != "none") refuse("xpbd.geometric_stiffness=" + p_.geometric_stiffness);
+    if (p_.primal_residual != "zero") refuse("xpbd.primal_residual=" + p_.primal_residual);
+    if (p_.hessian_projection != "clamp") refuse("xpbd.hessian_projection=" + p_.hessian_projection + " (vbd.projection is VBD's)");
+    if (p_.residual_metric != "true") refuse("residual_metric=" + p_.residual_metric + " (it stops on |grad E|)");
+    return;
+  }
   const bool local = find_method(method)->local;
   auto refuse = [&](const std::string& what) {
     throw Error("solver '" + method + "' is a local XPBD sweep: " + what +
@@ -143,6 +158,7 @@ void Simulation::substep(int frame, int sub) {
   Particles& P = prob_.particles;
   clock_.sub.reset();
   substep_.x_old = P.x;
+  substep_.v_old = P.v;
   for (int i = 0; i < P.size(); ++i)
     if (P.w[i] > 0) P.v.col(i) += h_ * prob_.gravity;
   substep_.x_pred = P.x + h_ * P.v;
@@ -163,12 +179,14 @@ void Simulation::substep(int frame, int sub) {
   ++res_.substeps_total;
   if (newton_) {
     newton_substep(frame, sub);
+  } else if (m_.block) {
+    block_descent_substep(frame, sub);
   } else {
     xpbd_substep(frame, sub);
   }
   res_.reference_time += clock_.excluded;
   if (stop_) return;
-  project_onto_planes(prob_, P.x);
+  if (!m_.block) project_onto_planes(prob_, P.x);  // block descent has the ground in its own energy
   P.v = (P.x - substep_.x_old) / h_;
   if (std::string st, msg; !stability_.check(P, frame, sub, st, msg)) fail(st, msg);
 }
@@ -257,6 +275,8 @@ void Simulation::finish() {
   }
   if (m_.local)
     for (const auto& [key, value] : m_.local->statistics()) res_.stats[key] = value;
+  if (m_.block)
+    for (const auto& [key, value] : m_.block->statistics()) res_.stats[key] = value;
   // Datasets that apply to this scene only: inverted tets per substep (tet scenes), the edge
   // list and rest lengths (distance constraints: plots/cloth_stretch.py colours edges by stretch).
   if (stability_.has_tets()) res_.arrays["inverted_tets"] = stability_.inverted_tets();
@@ -273,11 +293,9 @@ void Simulation::finish() {
     res_.stats["primal_rows"] = m_.global->primal()->system().rows();
     res_.stats["primal_nonzeros"] = static_cast<double>(m_.global->primal()->system().K().nonZeros());
   }
-  if (newton_) {
-    res_.stats["line_search_failures"] = ends_.search_failures;
-    res_.stats["substeps_rounding_floor"] = ends_.rounding_floor;
-  }
   res_.stats["particles"] = prob_.particles.size();
+  if (newton_) res_.stats["line_search_failures"] = ends_.search_failures;
+  if (newton_ || m_.block) res_.stats["substeps_rounding_floor"] = ends_.rounding_floor;
   // The process's largest resident set so far (its earlier runs included), and the limit it ran under.
   res_.stats["peak_memory"] = static_cast<double>(peak_resident_bytes());
   if (opt_.memory_limit > 0) res_.stats["memory_limit"] = opt_.memory_limit;

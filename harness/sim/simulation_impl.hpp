@@ -3,6 +3,7 @@
 // evaluation, the method step, Newton's line search). Not for use elsewhere.
 #pragma once
 
+#include "block_descent.hpp"
 #include "global_step.hpp"
 #include "forcing.hpp"
 #include "newton_loop.hpp"
@@ -52,6 +53,8 @@ class Simulation {
   // The outer loop of step = newton: the one Newton loop (newton_loop.hpp) with the stepper's hooks.
   void newton_substep(int frame, int sub);
   void xpbd_substep(int frame, int sub);
+  // The outer loop of vbd and avbd: the block-descent loop (block_descent.hpp) with the stepper's hooks.
+  void block_descent_substep(int frame, int sub);
   // Logs the state at iteration `it` (XPBD's methods: evaluates it); returns the residuals.
   Residuals log_state(int frame, int sub, int it, const LastStep& last);
   void log_entry(int frame, int sub, int it, const Entry& e, const LastStep& last);
@@ -97,6 +100,7 @@ class Simulation {
     std::optional<GlobalStep> global;
     std::optional<NewtonLoop> newton;  // step = newton: the one Newton loop on `global`
     std::optional<LocalMethod> local;
+    std::optional<BlockDescentLoop> block;  // vbd, avbd
     LinearSolver* active = nullptr;    // the global step's solver (its statistics)
     ForcingRule forcing;
     StopCriterion criterion;           // XPBD's outer loop (Newton's is its loop's)
@@ -114,7 +118,7 @@ class Simulation {
 
   // The substep: x̃, its start, and XPBD's outer-loop state (Newton's is its loop's).
   struct Substep {
-    Eigen::Matrix3Xd x_pred, x_old;
+    Eigen::Matrix3Xd x_pred, x_old, v_old;  // v_old: before gravity's kick
     Eigen::VectorXd lambda, b, dlambda;
     Eigen::Matrix3Xd dx, g, x_trial;
     ConstraintState state, trial_state;

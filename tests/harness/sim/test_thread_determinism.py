@@ -6,9 +6,10 @@ that say when, how fast or on how many threads a run ran (EXCLUDED, each with it
 
 The set: every in-house method (xpbd-jacobi, xpbd-authors, xpbd-gs, cg, jacobi-pcg, mgpbd) on a
 tet scene (squash) and on the cloth, the global ones in both forms; mgpbd with the float and the
-double V-cycle over two frames (setups and refreshes); a Newton run with --reference; a captured
-system solved in both forms. Sizes are chosen so that every vector spans several of
-core/reduce.hpp's chunks of 1,024 indices and every parallel loop runs on all threads (above
+double V-cycle over two frames (setups and refreshes); a Newton run with --reference; vbd (plain
+and Chebyshev) and avbd (on the squash with --reference, the cloth, and the ball in contact with
+the ground); a captured system solved in both forms. Sizes are chosen so that every vector spans
+several of core/reduce.hpp's chunks of 1,024 indices and every parallel loop runs on all threads (above
 kMinParallelRows = 2048).
 
 usage: python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench [--threads 1,2,3,4]
@@ -75,6 +76,12 @@ CASES = [
     # the Newton step, with the reference solution of the time step beside it
     ("newton", [*RUN, *SQUASH, "--frames", "1", "--profile", "newton", "--solver", "mgpbd", "--form", "primal",
                 "--reference"]),
+    # block descent on E (vbd: plain and Chebyshev; avbd: its multipliers and ramp) with the reference
+    ("vbd", [*RUN, *SQUASH, "--frames", "2", "--solver", "vbd,avbd", "--reference", "--set", "max_iterations=4"]),
+    ("vbd_cloth", [*RUN, "--frames", "1", "--scene", "cloth_hang", "--set", "resolution=63", "--solver", "vbd",
+                   "--set", "vbd.acceleration=chebyshev"]),
+    # avbd's ground (per-particle multipliers) in contact: ball_drop from frame 9 on
+    ("avbd_ground", [*RUN, "--frames", "11", "--scene", "ball_drop", "--set", "resolution=12", "--solver", "avbd"]),
     # the linear level: one captured system solved to 1e-6 (xpbd_bench.solve takes this path too)
     ("solve", ["solve", "--system", "{sys}", "--solver", "cg,jacobi-pcg,mgpbd", "--form", "dual,primal",
                "--tol", "1e-6", "--quiet"]),
