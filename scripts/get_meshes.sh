@@ -7,8 +7,8 @@
 #
 # NAME: bunny | armadillo | elephant. SIZE: 5k | 12k | 50k | 270k | 850k (the target tet count; the
 # result lands within about 15% of it, the exact count is in data/meshes/NAME_SIZE.log). 850k is the
-# paper's largest bunny (several minutes and a few GB of memory in tetgen). elephant:270k is the
-# held-out mesh of issue 39 (~240K tets): no setting was chosen on it.
+# paper's largest bunny (several minutes and a few GB of memory in tetgen). elephant:270k is a
+# held-out mesh (~240K tets): no setting was chosen on it.
 #
 # Where the geometry comes from: Debian's libcgal-demo ships /usr/share/doc/libcgal-dev/data.tar.gz
 # with data/meshes/bunny00.off (the Stanford bunny, 75K faces), data/meshes/armadillo.off (52K
