@@ -168,6 +168,7 @@ std::string scope_refusal(const std::string& key, const KeyScope& k, const std::
   std::vector<std::string> sites;
   for (const auto& r : runs)
     if (!contains(sites, describe(r))) sites.push_back(describe(r));
+  if (sites.size() > 3) sites.resize(3), sites.push_back("...");
   const std::string in = runs.size() == 1 && runs[0].method.empty() ? describe(runs[0])
                          : (runs.size() == 1 ? "this run (" : "any run here (") + join(sites, "; ") + ")";
   std::string msg = "parameter '" + key + "' has no effect in " + in + ": it applies to " + describe(KeyScope{k.kind, k.any, {}, ""});

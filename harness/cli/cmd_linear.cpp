@@ -89,6 +89,16 @@ void check_capture_outputs(const std::string& prefix, const std::string& scene, 
   }
 }
 
+// What a key set for `capture` may change: the run up to the captured iteration, or a later
+// `solve` of the file, which solves with the settings it was captured with.
+std::vector<CommandRun> capture_runs(const Params& p, const std::string& solver) {
+  std::vector<CommandRun> runs{{p, solver}};
+  for (const auto& m : methods())
+    if (!m.local && m.available)
+      for (const char* form : {"dual", "primal"}) runs.push_back({p, m.name, false, true, form});
+  return runs;
+}
+
 }  // namespace
 
 int cmd_capture(const CommandArgs& argv) {
@@ -107,7 +117,7 @@ int cmd_capture(const CommandArgs& argv) {
   if (solvers.size() != 1) throw Error("capture: --solver takes one linear solver (it drives the simulation)");
   const std::string& solver = solvers[0];
   Params p = resolve_params(scene, args.all("--set"));
-  check_keys({CommandRun{p, solver}});
+  check_keys(capture_runs(p, solver));
   if (substep < 0 || substep >= p.substeps)
     throw Error("capture: --substep " + std::to_string(substep) + " out of range [0, " + std::to_string(p.substeps - 1) + "]");
   if (iteration >= p.max_iterations)

@@ -183,7 +183,10 @@ std::vector<Context> contexts_for(const ParamField& f) {
   }
   if (auto it = extra_settings.find(f.key); it != extra_settings.end())
     for (auto& b : bases)
-      for (const auto& [k, v] : it->second) set_param(b.params, k, v, "extra");
+      for (const auto& [k, v] : it->second) {
+        set_param(b.params, k, v, "extra");
+        b.params.set_by_command.clear();  // the base of the runs, not what a command sets
+      }
   std::vector<Context> out = bases;
   std::set<std::string> seen;
   for (const auto& c : out) seen.insert(c.name);

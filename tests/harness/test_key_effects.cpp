@@ -119,8 +119,19 @@ TEST_P(KeyEffect, ChangesTheRunExactlyWhereItsScopeSays) {
     } else {
       ++without;
     }
-    // Where the key has no effect, the key its message names instead must have one.
+    // Where the key has no effect, setting it is refused by name, and the key its message names
+    // instead must have an effect there.
     const RunSite site = run_site(CommandRun{c.params, c.method, c.reference});
+    if (!has_effect(f.scope, site)) {
+      Params q = c.params;
+      set_param(q, key, param_to_string(c.params, f), "--set");  // its value here: the default is refused too
+      try {
+        check_keys({CommandRun{q, c.method, c.reference}});
+        ADD_FAILURE() << key << " set in " << c.name << " was not refused";
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--set: parameter '" + key + "' has no effect"), std::string::npos) << e.what();
+      }
+    }
     if (!has_effect(f.scope, site))
       for (const auto& [where, other] : f.scope.instead)
         if (in_scope(where, site))
