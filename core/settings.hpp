@@ -4,6 +4,8 @@
 // flat key space of scene files, --set and the HDF5 run attributes (harness/params.hpp).
 #pragma once
 
+#include "key_scope.hpp"
+
 #include <functional>
 #include <string>
 #include <variant>
@@ -24,6 +26,29 @@ struct SettingField {
   std::function<SettingRef(S&)> ref;  // the member it sets, in a given S
   double min = -1e300, max = 1e300;   // inclusive bounds for numbers
   std::vector<std::string> choices;   // allowed strings, empty = any
+  KeyScope scope;                     // where it has an effect (core/key_scope.hpp)
+  bool list = false;                  // a string that files may write as a TOML list (joined with ", ")
+
+  // The row's scope, declared beside its doc: the runs it changes, the key that does its job
+  // where it does not, or a setting that is only recorded.
+  SettingField applies(std::vector<Scope> where) && {
+    scope.kind = KeyScope::Kind::effect;
+    scope.any = std::move(where);
+    return std::move(*this);
+  }
+  SettingField instead(Scope where, std::string key) && {
+    scope.instead.emplace_back(std::move(where), std::move(key));
+    return std::move(*this);
+  }
+  SettingField record_only(std::string why) && {
+    scope.kind = KeyScope::Kind::record;
+    scope.record = std::move(why);
+    return std::move(*this);
+  }
+  SettingField list_value() && {
+    list = true;
+    return std::move(*this);
+  }
 };
 template <class S>
 using SettingTable = std::vector<SettingField<S>>;
@@ -49,11 +74,18 @@ SettingField<S> setting(std::string key, std::string doc, std::string S::*m, std
   return setting(std::move(key), std::move(doc), m, 0, 0, std::move(choices));
 }
 
-// Appends the rows of a part's table to its owner's: `part` maps an Outer to its Inner.
+// A part's row as a row of its owner's table: `part` maps an Outer to its Inner.
+template <class Outer, class Inner, class Part>
+SettingField<Outer> rebind(const SettingField<Inner>& f, Part part) {
+  SettingField<Outer> o{f.key, f.type, f.doc, [r = f.ref, part](Outer& x) { return r(part(x)); }, f.min, f.max, f.choices};
+  o.scope = f.scope;
+  o.list = f.list;
+  return o;
+}
+// Appends the rows of a part's table to its owner's.
 template <class Outer, class Inner, class Part>
 void append_part(SettingTable<Outer>& out, const SettingTable<Inner>& in, Part part) {
-  for (const auto& f : in)
-    out.push_back({f.key, f.type, f.doc, [r = f.ref, part](Outer& o) { return r(part(o)); }, f.min, f.max, f.choices});
+  for (const auto& f : in) out.push_back(rebind<Outer>(f, part));
 }
 
 // Text → a finite double. Returns "" when `v` was set, else what is wrong, in the words every

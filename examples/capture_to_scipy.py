@@ -21,13 +21,16 @@ import xpbd_bench as xb
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", default="cloth_hang")
-    ap.add_argument("--set", action="append", default=["resolution=16"], metavar="KEY=VALUE")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="any parameter (default resolution=16 where no mesh or resolution is given)")
     ap.add_argument("--frame", type=int, default=0)
     ap.add_argument("--iteration", type=int, default=0)
     ap.add_argument("--out", help="keep the files: PREFIX.h5, PREFIX_A.mtx, PREFIX_b.mtx, PREFIX_K.mtx, PREFIX_f.mtx")
     args = ap.parse_args()
-    s = xb.capture(args.scene, frame=args.frame, iteration=args.iteration,
-                   set=dict(kv.split("=", 1) for kv in args.set), out=args.out)
+    sets = dict(kv.split("=", 1) for kv in args.set)
+    if "mesh" not in sets:  # a key set where nothing reads it is refused: resolution means nothing for a file mesh
+        sets.setdefault("resolution", "16")
+    s = xb.capture(args.scene, frame=args.frame, iteration=args.iteration, set=sets, out=args.out)
     print(s, "| scene", s.attrs["scene"], "frame", s.attrs["frame"], "iteration", s.attrs["iteration"])
 
     # The dual matrix from its parts: M⁻¹ per column of J (each particle's x, y, z).

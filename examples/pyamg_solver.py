@@ -60,7 +60,9 @@ def main():
     ap.add_argument("--out", help="results file (default: a temporary one)")
     ap.add_argument("--progress", action="store_true", help="a live status line on a terminal")
     args = ap.parse_args()
-    sets = dict([("resolution", "6")] + [s.split("=", 1) for s in args.set])
+    sets = dict(s.split("=", 1) for s in args.set)
+    if "mesh" not in sets:  # a key set where nothing reads it is refused: resolution means nothing for a file mesh
+        sets.setdefault("resolution", "6")
     with tempfile.TemporaryDirectory() as tmp:
         out = args.out or os.path.join(tmp, "race.h5")
         runs = xb.run(args.scene, solvers=["mgpbd", PyamgSA()], out=out, frames=args.frames, set=sets,

@@ -39,7 +39,7 @@ def entry_sets(spec, scene, size, outer, linear, forcing):
     test; a sweep runs until its time budget."""
     o, m = spec["outer"][outer], spec["linear"][linear]
     sets = sets_of(scene.get("set"), size.get("set"), o.get("set"), m.get("set"), scene.get("linear_set", {}).get(linear))
-    if forcing not in ("none",):
+    if forcing not in ("none",) and m.get("forcing", True) is not False:  # a direct solve has no forcing
         sets["linear.forcing"] = forcing
     if o.get("own_stop"):
         sets = {k: v for k, v in sets.items() if k not in STOP_KEYS}

@@ -7,8 +7,8 @@ usage: python3 figures/run.py [--bench build/xpbd-bench] [--size default|paper] 
 For each spec figures/NAME.toml it runs `xpbd-bench sweep SPEC --size SIZE --out
 OUT/data/SIZE/NAME.h5` (a spec's [sizes.paper] table says what changes at the paper's size;
 resumable: a rerun skips finished runs), then plots/claims.py draws the figures into OUT/ and this
-driver writes OUT/summary.md with every measured number beside the paper's (numbers from
-shared/paper/paper_and_code_notes.md), and the same as stamped data, OUT/claims.json (the machine,
+driver writes OUT/summary.md with every measured number beside the paper's (the MGPBD paper's
+figures and the authors' public logs, as plots/claims.py quotes them), and the same as stamped data, OUT/claims.json (the machine,
 its triad and load taken when this driver starts; the runs' own dates and loads beside them), which
 `python3 plots/pages.py publish OUT/claims.json` makes docs/results/claims.md. A spec whose scene, solvers or meshes are missing is run
 with what exists; a claim whose inputs are missing is reported as "not run: <reason>", never
@@ -248,7 +248,7 @@ def write_summary(S, args, notes, files, elapsed):
         f.write("# The paper's claims, measured by `make figures`\n\n")
         f.write(f"Size: `{args.size}` (FIGURES_SIZE); generated {datetime.datetime.utcnow():%Y-%m-%d %H:%M} UTC "
                 f"in {elapsed / 60:.1f} min by `python3 figures/run.py --size {args.size}`.\n")
-        f.write("Paper numbers: shared/paper/paper_and_code_notes.md (authors' data, RTX 4090, float32); "
+        f.write("Paper numbers: the MGPBD paper and the authors' public logs, as plots/claims.py quotes them (RTX 4090, float32); "
                 "ours: this machine's CPU, double precision. Results files: "
                 f"`{os.path.relpath(os.path.join(args.out, 'data', args.size), ROOT)}/*.h5` "
                 "(rerunning resumes them).\n\n")

@@ -24,8 +24,12 @@ const SettingTable<Params>& param_fields() {
 
 const ParamField* find_param(const std::string& key) { return find_setting(param_fields(), key); }
 
-void set_param(Params& p, const std::string& key, const std::string& value, const std::string& where) {
+void set_param(Params& p, const std::string& key, const std::string& value, const std::string& where, KeySource source) {
+  if (const std::string why = scene_text_error(key, value); !why.empty())
+    throw Error(where + ": parameter '" + key + "' = '" + value + "': " + why);
   set_setting(param_fields(), p, key, value, where);
+  if (source == KeySource::command) p.set_by_command[key] = where;
+  if (source == KeySource::file) p.set_in_file[key] = where;
   if (key == "variant") apply_variant_keys(p);  // a variant sets the keys it implies, where it is set
 }
 
@@ -37,9 +41,17 @@ void load_scene_file(const std::string& path, Params& p) {
                 " (a scene file names its builder: scene = \"cloth_hang\", ...)");
   for (const auto& e : entries) {
     const std::string where = path + ":" + std::to_string(e.line);
-    if (e.is_array) throw Error(where + ": '" + e.key + "' must be a single value, not a list");
-    set_param(p, e.key, e.value, where);
+    set_param(p, e.key, entry_value(e, where), where, KeySource::file);
   }
+}
+
+std::string entry_value(const TomlEntry& e, const std::string& where) {
+  if (!e.is_array) return e.value;
+  const ParamField* f = find_param(e.key);
+  if (!f || !f->list) throw Error(where + ": '" + e.key + "' must be a single value, not a list");
+  std::string joined;
+  for (const auto& item : e.items) joined += (joined.empty() ? "" : ", ") + item;
+  return joined;
 }
 
 std::string param_to_string(const Params& p, const ParamField& f) { return setting_text(f, p); }

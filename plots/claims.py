@@ -1,7 +1,7 @@
 """The paper's claims, measured from the results of the figure sweeps (figures/run.py runs them):
 each claim_* reads its sweeps' results files, adds rows to a Summary and draws its figures.
 
-Used by figures/run.py; the numbers beside ours are the paper's (shared/paper/paper_and_code_notes.md).
+Used by figures/run.py; the numbers beside ours are the paper's (its figures, and the authors' public code and logs).
 """
 import os
 import subprocess

@@ -252,7 +252,7 @@ def claim(S, files, notes, out, keys):
         if not any(k in notes for k in keys):
             S.not_run(claim, "no results")
         return
-    # The targets and its scipy/pyamg prototype (shared/paper/xpbd_matrix_facts.md).
+    # The primal form's targets, from a scipy/pyamg prototype on the same kinds of system.
     target = {"cloth_hang": "≤ 0.1 (prototype, cloth 100²: 33 / 826 = 0.04)",
               "bar_hang": "≤ 0.2 (prototype, stretched bunny: 157 / 1275 = 0.12)"}
     found = verdicts(rows)

@@ -30,6 +30,9 @@ struct BuilderInfo {
 const std::vector<BuilderInfo>& scene_builders();
 // Refuses, by name, a key set to a value the scene's builder would ignore (mesh on cloth_hang, ...).
 void check_scene_keys(const SceneSettings& p);
+// Whether every constraint of p's scene is compliant (α > 0), from the settings alone: what
+// form = auto resolves by (primal when so) before the scene is built.
+bool every_constraint_compliant(const SceneSettings& p);
 // Builds p.scene's Problem; throws xb::Error for an unknown builder or a broken problem.
 Problem build_problem(const SceneSettings& p);
 

@@ -29,6 +29,12 @@ struct SceneSettings {
   double mesh_height = 0;            // m: mesh scenes scale the mesh so its y extent is this (0 = as the file is)
   std::string init = "none";         // squash start: none (collapsed) | enlarge (rest mesh x1.5 about its centroid)
   std::string variant = "none";      // extreme case (problems/scene.hpp: apply_variant); setting it also sets the keys it implies
+  // What a scene file adds to its builder's scene (problems/scene_pins.hpp): pins by particle
+  // index and by boxes of the start positions, whether the builder's own pins stay, a ground plane.
+  std::string pin_indices;           // "0, 32": particles pinned (inverse mass 0)
+  std::string pin_box;               // "xmin, ymin, zmin, xmax, ymax, zmax" (6 numbers per box, m)
+  std::string builder_pins = "keep";  // keep | none: the builder's own pins (cloth_hang's corners, ...)
+  std::string ground = "builder";    // builder (ball_drop's y = 0, none elsewhere) | none | a height in m
 };
 
 const SettingTable<SceneSettings>& scene_settings();
@@ -36,6 +42,10 @@ const SettingTable<SceneSettings>& scene_settings();
 // Sets the keys s.variant implies (rigid: compliance 0; mu1e12: stiffness 1e12;
 // mass_ratio_1e4: mass_ratio 1e4; dt_30hz: dt 1/30 s). Called where `variant` is set.
 void apply_variant_keys(SceneSettings& s);
+
+// What is wrong with the text of a key that has a format of its own (pins.indices, pins.box,
+// ground: problems/scene_pins.cpp); "" when nothing is, or for any other key.
+std::string scene_text_error(const std::string& key, const std::string& value);
 
 // Checks across keys, or of defaults a scene file could have left inconsistent (dt > 0, frames >= 1);
 // throws xb::Error naming the key.

@@ -9,8 +9,8 @@
 # tet count; the result lands within about 15% of it, the exact count is in data/meshes/NAME_SIZE.log).
 # 850k is the paper's largest bunny (several minutes and a few GB of memory in tetgen); 1600k is the
 # size of the paper's 1.66M-tet showcase: its target is 1.75M and it is never below 1.6M tets (about
-# 10 minutes and 5 GB in tetgen). elephant:270k is the held-out mesh of issue 39 (~240K tets): no
-# setting was chosen on it. femur (a thigh bone, about 3:1 long, genus 2) is the race's elongated
+# 10 minutes and 5 GB in tetgen). elephant:270k is a held-out mesh (~240K tets): no setting was
+# chosen on it. femur (a thigh bone, about 3:1 long, genus 2) is the race's elongated
 # shape (figures/race/race.toml: squash at 270k).
 #
 # Where the geometry comes from: Debian's libcgal-demo ships /usr/share/doc/libcgal-dev/data.tar.gz

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The timings of issue 38 (one results file, many writers), for a quiet machine:
+"""The timings of one results file with many writers (docs/failures.md), for a quiet machine:
 
 1. an append costs what it adds: one small run appended (by `sweep`) to a ~200 MB results file
    against the same run into a new file: wall time <= 2x + 0.3 s, peak memory <= 1.5x + 100 MB;

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Every projection strategy of Newton on E on every stock scene (docs/newton.md, issue 36).
+"""Every projection strategy of Newton on E on every stock scene (docs/newton.md): the measurements
+the newton profile's choice of xpbd.hessian_projection rests on.
 
 usage: python3 scripts/newton_variants.py [--bench build/xpbd-bench] [--out DIR]
            [--strategies clamp,abs,...] [--scenes a,b] [--meshes bunny:12k,bunny:50k]

@@ -6,16 +6,26 @@ namespace {
 SettingTable<SolverSettings> make_table() {
   using S = SolverSettings;
   SettingTable<S> t = {
-      setting("seed", "random seed", &S::seed, 0, 2147483647.0),
+      setting("seed", "random seed", &S::seed, 0, 2147483647.0).applies({on("mgpbd").also_solve()}),
   };
+  // The linear methods that iterate to a tolerance: the Krylov ones, and cholmod with a lagged factor.
+  const Scope iterative = on("cg,jacobi-pcg,mgpbd,hypre,muelu,python"), lagged = on("cholmod").where("cholmod.refactor=lagged");
+  const std::vector<Scope> ew = {Scope(iterative).where("linear.forcing=eisenstat_walker"),
+                                 Scope(lagged).where("linear.forcing=eisenstat_walker")};
   const SettingTable<LinearSettings> linear = {
-      setting("linear.tol", "linear solve: |r|_2 <= tol |b|_2", &LinearSettings::tol, 0, 1),
-      setting("linear.max_iterations", "linear solve iteration limit", &LinearSettings::max_iterations, 1, 1e9),
-      setting("linear.forcing", "inner tolerance per outer iteration: fixed (linear.tol) | eisenstat_walker (eta_k = gamma (r_k/r_k-1)^alpha, safeguarded, in [linear.tol, linear.forcing_max])", &LinearSettings::forcing, {"fixed", "eisenstat_walker"}),
-      setting("linear.forcing_max", "eisenstat_walker: the largest inner tolerance (also the first of each substep)", &LinearSettings::forcing_max, 1e-300, 0.999),
-      setting("linear.forcing_gamma", "eisenstat_walker: gamma of choice 2", &LinearSettings::forcing_gamma, 1e-300, 1),
-      setting("linear.forcing_alpha", "eisenstat_walker: alpha of choice 2", &LinearSettings::forcing_alpha, 1.0 + 1e-12, 2),
-      setting("linear.stop_norm", "norm of the linear stop test: dual (|J M^-1 r_K| in the primal form) | primal (the solved system's |r|_2) | energy (preconditioned norm sqrt(r'M^-1 r))", &LinearSettings::stop_norm, {"dual", "primal", "energy"}),
+      setting("linear.tol", "linear solve: |r|_2 <= tol |b|_2", &LinearSettings::tol, 0, 1).applies({Scope(iterative).also_solve(), lagged}),
+      setting("linear.max_iterations", "linear solve iteration limit", &LinearSettings::max_iterations, 1, 1e9)
+          .applies({on("cg,jacobi-pcg,mgpbd,hypre,muelu").also_solve()})
+          .instead(lagged, "cholmod.lagged_max_iterations"),  // a fresh factor's CG takes one iteration
+      setting("linear.forcing", "inner tolerance per outer iteration: fixed (linear.tol) | eisenstat_walker (eta_k = gamma (r_k/r_k-1)^alpha, safeguarded, in [linear.tol, linear.forcing_max])", &LinearSettings::forcing, {"fixed", "eisenstat_walker"}).applies({iterative, lagged}),
+      setting("linear.forcing_max", "eisenstat_walker: the largest inner tolerance (also the first of each substep)", &LinearSettings::forcing_max, 1e-300, 0.999).applies(ew),
+      setting("linear.forcing_gamma", "eisenstat_walker: gamma of choice 2", &LinearSettings::forcing_gamma, 1e-300, 1).applies(ew),
+      setting("linear.forcing_alpha", "eisenstat_walker: alpha of choice 2", &LinearSettings::forcing_alpha, 1.0 + 1e-12, 2).applies(ew),
+      setting("linear.stop_norm", "norm of the linear stop test: dual (|J M^-1 r_K| in the primal form) | primal (the solved system's |r|_2) | energy (preconditioned norm sqrt(r'M^-1 r))", &LinearSettings::stop_norm, {"dual", "primal", "energy"})
+          .applies({Scope(iterative).in("primal").where("xpbd.geometric_stiffness!=full").also_solve(),
+                    Scope(lagged).in("primal").where("xpbd.geometric_stiffness!=full"),
+                    on("jacobi-pcg,mgpbd,hypre").where("linear.stop_norm=energy").also_solve(),
+                    Scope(lagged).where("linear.stop_norm=energy")}),  // dual = primal in the dual form, and under full (K's own residual); energy = primal for cg
   };
   append_part(t, linear, [](S& s) -> LinearSettings& { return s.linear; });
   append_part(t, amg_settings(), [](S& s) -> amg::AmgOptions& { return s.amg; });

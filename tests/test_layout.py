@@ -10,13 +10,16 @@
 - no include loops: a unit (NAME.hpp with NAME.cpp) never reaches itself through the includes;
 - tests mirror the source: every .cpp under a folder of MIRRORED has tests/<folder>/test_<name>.cpp;
 - determinism: no OpenMP reduction(+ : …) (or − or *) over a double or a float outside tests/: its
-  rounding depends on the thread count (sums go through core/reduce.hpp, docs/determinism.md).
+  rounding depends on the thread count (sums go through core/reduce.hpp, docs/determinism.md);
+- no tracker numbers in code (an issue's or a pull request's number, "#" and digits): a reader of the code has no tracker, so
+  a comment says why, not which ticket. Markdown is not checked (docs may cite the history).
 
 usage: python3 tests/test_layout.py [--root DIR] [--report]   (--report lists, never fails)
 """
 import argparse
 import os
 import re
+import subprocess
 import sys
 
 MAX_FILE_LINES = 400
@@ -197,6 +200,39 @@ def float_reductions(root, path):
     return found
 
 
+CODE_FILES = (".cpp", ".hpp", ".py", ".toml", ".sh", ".cmake", "CMakeLists.txt", "Makefile")
+TRACKER = re.compile(r"\b(?:[Ii]ssues?|PR|[Pp]ull request)[ -]?#?\d+|(?<![&\w#])#\d{1,4}\b")
+
+
+def code_files(root):
+    """The tracked code files (and untracked ones git does not ignore), else every one under root."""
+    try:
+        out = subprocess.run(["git", "-C", root, "ls-files", "--cached", "--others", "--exclude-standard"],
+                             capture_output=True, text=True, check=True).stdout.split("\n")
+        return [os.path.join(root, f) for f in out if f.endswith(CODE_FILES) and os.path.isfile(os.path.join(root, f))]
+    except (OSError, subprocess.CalledProcessError):
+        pass
+    found = []
+    for d, dirs, names in os.walk(root):
+        dirs[:] = [x for x in dirs if not x.startswith(".") and not x.startswith("build") and x != "shared"]
+        found += [os.path.join(d, f) for f in sorted(names) if f.endswith(CODE_FILES)]
+    return found
+
+
+def tracker_numbers(root, paths):
+    """Lines of code files that cite a tracker number (preprocessor lines aside)."""
+    out = []
+    for path in paths:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            for n, line in enumerate(fh, 1):
+                if re.match(r"\s*#\s*(include|pragma|define|if|ifdef|ifndef|endif|else|elif|undef|error)\b", line):
+                    continue
+                m = TRACKER.search(line)
+                if m:
+                    out.append(f"{os.path.relpath(path, root)}:{n}: cites a tracker number ('{m.group(0)}'): say why instead")
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--root", default=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -217,6 +253,7 @@ def main():
         problems += long_functions(a.root, path)
         if not os.path.relpath(path, a.root).startswith("tests"):
             problems += float_reductions(a.root, path)
+    problems += tracker_numbers(a.root, code_files(a.root))
     for p in problems:
         print(p)
     print(f"layout: {len(problems)} problem(s)")

@@ -6,7 +6,8 @@ ls-files`; every such file under ROOT where git is not there), generated pages c
 snapshots included; a token that looks like a path under one of the project's folders (core/,
 problems/, solvers/, harness/, ..., or a path relative to the file's own folder) must name a file
 or folder that exists. Placeholders (an upper-case word such as NAME or X, `...`), generated
-outputs (GENERATED) and the shared folder outside the repository (shared/) are not checked.
+outputs (GENERATED) are not checked. A path into the shared folder beside the working tree
+(shared/..., ../shared/...) is refused: a clone does not have it, so a reader cannot follow it.
 
 usage: python3 tests/test_paths.py [--root DIR]
 """
@@ -49,7 +50,10 @@ def broken(root, path):
     for n, line in comment_lines(path, text):
         for m in PATH.finditer(line):
             p = m.group(1)
-            if re.search(r"\b[A-Z]{1,}\b(?=[./])|\.\.\.|[*{<$]", p) or p.startswith(("shared/", "../shared/")):
+            if p.startswith(("shared/", "../shared/")):
+                out.append(f"{rel}:{n}: names {p}, outside the repository (a clone has no shared/)")
+                continue
+            if re.search(r"\b[A-Z]{1,}\b(?=[./])|\.\.\.|[*{<$]", p):
                 continue
             if p.startswith(GENERATED):
                 continue

@@ -11,6 +11,7 @@
 #include "../io/mesh_writer.hpp"
 #include "../io/schema.hpp"
 #include "../io/state_io.hpp"
+#include "../key_check.hpp"
 
 #include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
@@ -32,9 +33,24 @@ int cmd_list(const CommandArgs& argv) {
     if (!m.available) std::cout << "  unavailable: " << m.reason;
     std::cout << "\n";
   }
-  std::cout << "parameters (key = default: doc):\n";
+  std::cout << "parameters (key = default: doc [where it has an effect; set anywhere else it is refused]):\n";
   const Params defaults;
-  for (const auto& f : param_fields()) std::cout << "  " << f.key << " = " << param_to_string(defaults, f) << ": " << f.doc << "\n";
+  for (const auto& f : param_fields())
+    std::cout << "  " << f.key << " = " << param_to_string(defaults, f) << ": " << f.doc << " [" << describe(f.scope) << "]\n";
+  // What a scene file can set: any key above (stepper and solver keys for the runs that read
+  // them); of the scene's own keys, those its builder reads.
+  std::cout << "scene files (scene = BUILDER, then any key above; the scene keys each builder reads):\n";
+  for (const auto& b : scene_builders()) {
+    std::string keys;
+    for (const auto& f : scene_settings()) {
+      RunSite site;
+      site.value = [&b](const std::string& key) -> std::optional<std::string> {
+        return key == "scene" ? std::optional<std::string>(b.name) : std::nullopt;
+      };
+      if (f.key != "scene" && has_effect(f.scope, site)) keys += (keys.empty() ? "" : ", ") + f.key;
+    }
+    std::cout << "  " << b.name << ": " << b.description << "\n      " << keys << "\n";
+  }
   return 0;
 }
 
@@ -108,6 +124,7 @@ int cmd_run(const CommandArgs& argv) {
   Params p = resolve_params(scene, sets, args.get("--profile", ""));  // scene < profile < --set
   if (state_frame >= p.frames) p.frames = state_frame + 1;  // the run must reach frame F
   const auto runs = method_runs(parse_methods(args.require("--solver")), args.get("--form", ""));
+  check_run_keys(p, runs, args.has("--form"), args.has("--reference"), "run");
   if (!save_state.empty() && runs.size() != 1) throw Error("run: --save-state needs exactly one solver (one trajectory)");
   // Inputs are never outputs; output folders are made (or refused) now, not after the runs.
   std::vector<std::string> inputs = mesh_inputs(p);

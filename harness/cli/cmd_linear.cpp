@@ -11,6 +11,7 @@
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
 #include "../io/system_io.hpp"
+#include "../key_check.hpp"
 
 #include "../../core/error.hpp"
 #include "../../problems/scene.hpp"
@@ -61,7 +62,7 @@ Params params_from_system(const CapturedSystem& sys, const std::string& path) {
   Params p;
   for (const auto& f : param_fields()) {
     if (!sys.attrs.count(f.key)) continue;
-    set_param(p, f.key, attr_text(sys.attrs, f.key), path + " (attribute " + f.key + ")");
+    set_param(p, f.key, attr_text(sys.attrs, f.key), path + " (attribute " + f.key + ")", KeySource::none);
   }
   return p;
 }
@@ -88,6 +89,16 @@ void check_capture_outputs(const std::string& prefix, const std::string& scene, 
   }
 }
 
+// What a key set for `capture` may change: the run up to the captured iteration, or a later
+// `solve` of the file, which solves with the settings it was captured with.
+std::vector<CommandRun> capture_runs(const Params& p, const std::string& solver) {
+  std::vector<CommandRun> runs{{p, solver}};
+  for (const auto& m : methods())
+    if (!m.local && m.available)
+      for (const char* form : {"dual", "primal"}) runs.push_back({p, m.name, false, true, form});
+  return runs;
+}
+
 }  // namespace
 
 int cmd_capture(const CommandArgs& argv) {
@@ -106,6 +117,7 @@ int cmd_capture(const CommandArgs& argv) {
   if (solvers.size() != 1) throw Error("capture: --solver takes one linear solver (it drives the simulation)");
   const std::string& solver = solvers[0];
   Params p = resolve_params(scene, args.all("--set"));
+  check_keys(capture_runs(p, solver));
   if (substep < 0 || substep >= p.substeps)
     throw Error("capture: --substep " + std::to_string(substep) + " out of range [0, " + std::to_string(p.substeps - 1) + "]");
   if (iteration >= p.max_iterations)
@@ -302,6 +314,11 @@ int cmd_solve(const CommandArgs& argv) {
       throw Error("solve: " + system_path + " has no primal data (/J; captured before the primal form existed): recapture it, or use form=dual");
     setups.emplace_back(q, sys.has_primal() ? resolve_form(q.form, sys.alpha_tilde) : "dual");
   }
+  if (args.has("--form") && p.set_by_command.count("form"))
+    throw Error("solve: --form and " + p.set_by_command.at("form") + " form=" + p.form + " both choose the form; give one");
+  std::vector<CommandRun> checked;
+  for (size_t i = 0; i < runs.size(); ++i) checked.push_back({setups[i].first, runs[i].method, false, true, setups[i].second});
+  check_keys(checked);
   const bool show = progress_wanted(args);
   DirectReference ref;
   {

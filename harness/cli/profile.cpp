@@ -31,7 +31,6 @@ void apply_profile(const std::string& name_or_file, Params& p) {
   const std::string scene_prefix = "scenes.";
   for (auto e : read_toml_flat(path)) {
     const std::string where = path + ":" + std::to_string(e.line);
-    if (e.is_array) throw Error(where + ": '" + e.key + "' must be a single value, not a list");
     if (e.key.rfind(scene_prefix, 0) == 0) {
       // [scenes.<builder>] key = value: only for that scene.
       const std::string rest = e.key.substr(scene_prefix.size());
@@ -42,7 +41,7 @@ void apply_profile(const std::string& name_or_file, Params& p) {
     }
     if (e.key == "scene" || e.key == "variant")
       throw Error(where + ": a profile may not set '" + e.key + "' (it chooses how a scene is run, not which)");
-    set_param(p, e.key, e.value, where);
+    set_param(p, e.key, entry_value(e, where), where, KeySource::file);
   }
   p.profile = fs::path(path).stem().string();
 }

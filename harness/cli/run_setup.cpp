@@ -2,6 +2,7 @@
 
 #include "args.hpp"
 #include "profile.hpp"
+#include "../key_check.hpp"
 
 #include "../../core/error.hpp"
 #include "../../core/process_memory.hpp"
@@ -83,6 +84,23 @@ std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, cons
     for (const auto& f : forms) runs.push_back({m, f, forms.size() > 1 ? m + "_" + f : m});
   }
   return runs;
+}
+
+}  // namespace xb
+
+namespace xb {
+
+void check_run_keys(const Params& p, const std::vector<MethodRun>& runs, bool form_flag, bool reference,
+                    const std::string& command) {
+  if (form_flag && p.set_by_command.count("form"))
+    throw Error(command + ": --form and " + p.set_by_command.at("form") + " form=" + p.form + " both choose the form; give one");
+  std::vector<CommandRun> checked;
+  for (const auto& r : runs) {
+    CommandRun c{p, r.method, reference};
+    if (!r.form.empty()) c.params.form = r.form;
+    checked.push_back(std::move(c));
+  }
+  check_keys(checked);
 }
 
 }  // namespace xb

@@ -45,5 +45,9 @@ struct MethodRun {
 // The runs of --solver × --form: a local method runs once, a global method once per form of
 // `form_list` (comma-separated dual | primal | auto; empty = the parameters' form only).
 std::vector<MethodRun> method_runs(const std::vector<std::string>& methods, const std::string& form_list);
+// The key check (harness/key_check.hpp) of `command`'s runs: every key it set must change one of
+// them. --form and --set form=... together are refused (the flag would replace the key).
+void check_run_keys(const Params& p, const std::vector<MethodRun>& runs, bool form_flag, bool reference,
+                    const std::string& command);
 
 }  // namespace xb

@@ -5,6 +5,7 @@
 #include "profile.hpp"
 #include "run_setup.hpp"
 #include "../io/run_record.hpp"
+#include "../key_check.hpp"
 
 #include "../../core/error.hpp"
 #include "../../core/toml_flat.hpp"
@@ -66,7 +67,10 @@ Params base_params(const SweepSpec& spec) {
   Params p;
   load_scene_file(spec.scene, p);
   if (!spec.profile.empty()) apply_profile(spec.profile, p);
-  for (const auto& kv : spec.sets) apply_set(p, kv);
+  for (const auto& kv : spec.sets) {
+    const std::string key = kv.substr(0, kv.find('='));
+    set_param(p, key, kv.substr(kv.find('=') + 1), spec.path + ": [set] '" + key + "'");
+  }
   return p;
 }
 
@@ -133,10 +137,14 @@ void add_sets_and_grid(SweepSpec& spec, const std::string& frames, int frames_li
   }
   for (const TomlEntry* e : sets) {
     const std::string key = e->key.substr(4);
-    if (e->is_array)
+    const ParamField* f = find_param(key);
+    if (e->is_array && !(f && f->list))
       throw Error(where(*e) + ": [set] '" + key + "' must be a single value (lists belong in [grid])");
-    set_param(probe, key, e->value, where(*e));
-    spec.sets.push_back(key + "=" + e->value);
+    TomlEntry one = *e;
+    one.key = key;
+    const std::string value = entry_value(one, where(*e));
+    set_param(probe, key, value, where(*e));
+    spec.sets.push_back(key + "=" + value);
   }
   std::set<std::string> fixed_keys;
   for (const auto& kv : spec.sets) fixed_keys.insert(kv.substr(0, kv.find('=')));
@@ -274,7 +282,7 @@ std::vector<SweepJob> expand_sweep(const SweepSpec& spec) {
       stride /= vals.size();
       const size_t i = rest / stride;
       rest %= stride;
-      set_param(p, key, vals[i], spec.path + ": [grid] '" + key + "'");
+      set_param(p, key, vals[i], spec.path + ": [grid] axis '" + key + "'");
     }
     std::string point_text;
     for (const auto& [key, vals] : spec.grid) {
@@ -302,6 +310,11 @@ std::vector<SweepJob> expand_sweep(const SweepSpec& spec) {
         jobs.push_back(std::move(j));
       }
   }
+  // Every key the spec sets, and every grid axis, must change one of its runs.
+  std::vector<CommandRun> checked;
+  for (const auto& j : jobs)
+    if (j.repeat == 0) checked.push_back({j.params, j.solver, spec.reference});
+  check_keys(checked);
   return jobs;
 }
 

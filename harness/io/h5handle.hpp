@@ -2,7 +2,7 @@
 // list, dataspace, datatype) is owned by one H, which closes it when it goes out of scope, on the
 // error paths too (an exception thrown while objects of a file are open closes them first, the
 // file last: locals are destroyed in reverse order). Nothing is left open for HDF5's own exit
-// handlers, which crashed on a file left half-closed after a failed write (issue 33).
+// handlers, which crash on a file left half-closed after a failed write (a full disk).
 //
 //   H file(H5Fcreate(...), H5Fclose);      // negative ids are held but never closed
 //   H g(H5Gcreate2(file, ...), H5Gclose);

@@ -46,8 +46,8 @@ H open_file(const std::string& path);
 
 // Files we write are built in memory (HDF5's core driver, no backing store) and their image
 // written through the atomic layer (atomic_file.hpp) by us: HDF5 itself never writes to disk, so
-// a full disk cannot leave an HDF5 file half-written and half-closed inside the library (the
-// crash of issue 33 in its exit handlers), and every failed write is met in one place, with its
+// a full disk cannot leave an HDF5 file half-written and half-closed inside the library (which
+// then crashes in its exit handlers), and every failed write is met in one place, with its
 // errno, where the test hook (io_fault.hpp) can fail it too. The cost is the file's size in
 // memory, twice while its image is taken; results and captured systems are MBs, not GBs.
 // Each file closes strongly: closing it closes every object still open in it.

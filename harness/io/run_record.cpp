@@ -130,8 +130,8 @@ const LogArray log_arrays[] = {
     {"linear_history/offset", &IterationLog::linear_history_offset, true},
 };
 
-// The Newton residual's last entry, and where every α̃ > 0 what the reference's ‖∇E‖ reached
-// (issue 30's records; results/README.md).
+// The Newton residual's last entry, and where every α̃ > 0 what the reference's ‖∇E‖ reached:
+// how far a run got towards the backward-Euler solution (results/README.md).
 void add_newton_attributes(RunRecord& r, const IterationLog& L) {
   if (!L.newton_residual.empty()) {
     r.attrs["final_newton_residual"] = L.newton_residual.back();

@@ -33,8 +33,8 @@ bool is_named_mesh(const std::string& spec) {
 std::string named_mesh_path(const std::string& spec) {
   const auto colon = spec.find(':');
   const std::string name = spec.substr(0, colon), size = spec.substr(colon + 1);
-  // The names and sizes of scripts/get_meshes.sh (elephant: the held-out mesh of issue 39; femur:
-  // the race's elongated shape).
+  // The names and sizes of scripts/get_meshes.sh (elephant: a held-out mesh, on which no setting
+  // was chosen; femur: the race's elongated shape).
   if (name != "bunny" && name != "armadillo" && name != "elephant" && name != "femur")
     throw Error("mesh '" + spec + "': unknown real mesh '" + name + "' (valid: bunny, armadillo, elephant, femur)");
   if (size != "5k" && size != "12k" && size != "50k" && size != "270k" && size != "850k" && size != "1600k")

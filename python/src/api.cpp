@@ -96,6 +96,7 @@ nb::list parameter_list() {
     d["key"] = f.key;
     d["default"] = param_to_string(defaults, f);
     d["doc"] = f.doc;
+    d["applies"] = describe(f.scope);  // where it has an effect (core/key_scope.hpp)
     l.append(d);
   }
   return l;
@@ -141,7 +142,7 @@ void bind_api(nb::module_& m) {
         "py:<name> for an object of the solver protocol; raises Error naming what it lacks.");
   m.def("scenes", &scene_names, "The built-in scenes.");
   m.def("solvers", &solver_list, "The built-in methods: name, kind (local | global), available, reason, description.");
-  m.def("parameters", &parameter_list, "Every parameter key: key, default, doc.");
+  m.def("parameters", &parameter_list, "Every parameter key: key, default, doc, applies (where it has an effect).");
   m.def("count_runs", &count_runs, nb::arg("path"),
         "The number of runs in a results file (0 if absent); raises Error for a file that is not one.");
   m.def("read", &read, nb::arg("path"), "Every run of a results file as a dict of its attributes and datasets.");

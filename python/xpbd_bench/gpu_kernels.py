@@ -4,7 +4,7 @@ the same operations on NumPy/SciPy, what CI runs. Both count what they would lau
 and the blocking reads of device scalars by the host (`syncs`), so the count per PCG iteration is
 measured, and tested, without a device.
 
-What is fused (issue 39: one PCG iteration at 270K was ~150-200 launches and 4-5 host syncs):
+What is fused (unfused, one PCG iteration at 270K was ~150-200 launches and 4-5 host syncs):
  - a smoother step d = c1*d + c2*D^-1(b - A x), x_out = x + d in one kernel, a thread per node
    (D^-1 by node blocks or scalars); x is double-buffered, as neighbours read x while it changes;
  - PCG's scalars (p^T A p, r^T z, the residual norm, the V-cycle's scale ||b||inf) stay on the

@@ -1,4 +1,4 @@
-"""The plots' writer (plots/xbruns.py write_figure, issue 33): a figure is written whole or not at
+"""The plots' writer (plots/xbruns.py write_figure): a figure is written whole or not at
 all. A failed write, flush or rename (a full disk) ends the script with one line naming the file
 and the cause in words and exit code 2, the earlier file byte-for-byte as it was and no .tmp; on a
 real 300 KB tmpfs too, where this machine lets us mount one."""

@@ -42,7 +42,7 @@ class MpiEnv : public ::testing::Environment {
 [[maybe_unused]] ::testing::Environment* const mpi_env = ::testing::AddGlobalTestEnvironment(new MpiEnv);
 
 const std::set<std::string> paper_scenes = {"squash", "twist_bar", "cantilever", "cloth_hang", "ball_drop", "mass_chain"};
-// Tournier et al. 2015's heavy-end-mass chains (issue 30).
+// Tournier et al. 2015's heavy-end-mass chains.
 const std::set<std::string> chain_scenes = {"heavy_rope", "pendulum"};
 
 Params tiny(const std::string& scene, std::vector<std::string> sets = {}) {

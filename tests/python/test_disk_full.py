@@ -1,4 +1,4 @@
-"""A full disk through the Python package (issue 33; docs/failures.md): xb.run, xb.solve and
+"""A full disk through the Python package (docs/failures.md): xb.run, xb.solve and
 xb.capture against a write failing at the first write of an append, in the middle of the run's
 file, at the index's last write and flush, and at either rename (an append writes the run's file
 in FILE.runs/, then the index FILE; XB_FAULT_WRITE / XB_FAULT_RENAME, read once per process, so

@@ -1,4 +1,4 @@
-"""Python threads and processes sharing the package and one results file (issue 38): two threads in
+"""Python threads and processes sharing the package and one results file: two threads in
 xb.solve at once both write their results (libhdf5, not thread-safe here, is entered under one
 lock; it used to crash the interpreter in H5Dget_type), threads appending to one file keep every
 run, and a killed xb.run leaves the file readable and nothing behind. Each case is its own

@@ -2,7 +2,7 @@
 // (make_smoother). The interface is smoother.hpp; one file per kind:
 //  jacobi:    (chebyshev.hpp) x += ω D⁻¹(b − Ax), ω = 1/λ_max(D⁻¹A) (the authors' 2/(λ_max+λ_min) with
 //             λ_min = λ_max). A fixed ω such as 0.72 diverges on XPBD matrices, where
-//             ρ(D⁻¹A) reaches 4–11 (shared/paper/xpbd_matrix_facts.md), so λ_max is estimated.
+//             ρ(D⁻¹A) reaches 4–11 (scripts/dual_spectrum.py on captured systems), so λ_max is estimated.
 //  chebyshev: (chebyshev.hpp) Chebyshev polynomial in D⁻¹A on [ρ/30, 1.1ρ] (the authors' cloth setting, degree 3),
 //             ρ estimated per level (the authors reuse level 0's; per level is cheap and safer).
 //  gs:        (gauss_seidel.hpp) multicolour Gauss–Seidel, forward sweeps before, backward sweeps after.

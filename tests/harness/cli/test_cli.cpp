@@ -107,7 +107,7 @@ TEST(Cli, BadInputIsOneLineNonZeroAndWritesNothing) {
       {"run --scene cloth_hang --solver cholmod --set resolution=abc --out " + out, "resolution"},
       {"run --scene cloth_hang --solver cholmod --bogus --out " + out, "--bogus"},
       {"nosuchcommand", "nosuchcommand"},
-      // issue 36: capture writes XPBD's step only; step=newton needs the constraints' Hessians.
+      // capture writes XPBD's step only; step=newton needs the constraints' Hessians.
       {"capture --scene twist_bar --set resolution=2 --set step=newton --frame 0 --iteration 1 --out " + out, "step=newton"},
       {"run --scene twist_bar --solver cholmod --set resolution=2 --profile newton --set xpbd.geometric_stiffness=diagonal --out " + out,
        "xpbd.geometric_stiffness=full"},

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""One results file, many writers (issue 38; docs/failures.md, results/README.md), through the CLI:
+"""One results file, many writers (docs/failures.md, results/README.md), through the CLI:
 
 - 8 sweeps appending to one file at once keep all 32 runs, under 32 names;
 - 8 `run --out` into one file at once leave it readable and holding one writer's complete runs;

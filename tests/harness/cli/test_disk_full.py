@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A full disk through the CLI (issue 33; docs/failures.md): run, solve, sweep and capture each
+"""A full disk through the CLI (docs/failures.md): run, solve, sweep and capture each
 meet a write that fails at the first write call of an append, in the middle of the run's file, at
 the index's last write and flush, and at the rename of either (an append writes the run's file in
 FILE.runs/ and then the index FILE: harness/io/recorder.hpp; the fault hook XB_FAULT_WRITE /
@@ -218,7 +218,7 @@ def capture_cases(binary, work):
 
 
 def real_full_disk(binary, work):
-    """The commands of issue 33's table on a 300 KB tmpfs holding an earlier file and a filler."""
+    """Every writing command (docs/failures.md) on a 300 KB tmpfs holding an earlier file and a filler."""
     mnt = os.path.join(work, "small_fs")
     os.makedirs(mnt)
     p = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=300k", "tmpfs", mnt], capture_output=True, text=True)

@@ -1,4 +1,4 @@
-// `report`'s simulation table shows each run's own convergence measure (issue 36): relative ‖∇E‖
+// `report`'s simulation table shows each run's own convergence measure: relative ‖∇E‖
 // under step = newton, whose dual residual is rounding over rounding, the dual residual under XPBD;
 // the position error and the reference's verdict where the run has a reference.
 #include "harness/cli/commands.hpp"

@@ -114,7 +114,7 @@ std::string attr_string(const RunRecord& r, const std::string& k) {
 TEST(SweepSpec, IssueExampleExpandsToOneRunPerPointAndSolver) {
   const auto d = temp_dir("example");
   const std::string spec = write(d / "s.toml", "scene = \"bar_hang\"\nsolvers = [\"" + theta_solver() +
-                                                   "\", \"xpbd-gs\"]\nframes = 1\n[set]\nmax_iterations = 50\n"
+                                                   "\", \"xpbd-gs\"]\nframes = 1\n[set]\nform = \"dual\"\nmax_iterations = 50\n"
                                                    "[grid]\n\"amg.strength_threshold\" = [0.0, 0.1, 0.25]\n");
   const SweepSpec s = parse_sweep_spec(spec);
   const auto jobs = expand_sweep(s);
@@ -174,8 +174,8 @@ TEST(SweepSpec, FigureSpecsParse) {
 TEST(SweepSpec, SizeTablesReplaceOnlyWhatTheyName) {
   const auto d = temp_dir("sizes");
   const std::string spec = write(d / "s.toml",
-                                 "scene = \"bar_hang\"\nsolvers = [\"cholmod\"]\ntime_budget = 5\n"
-                                 "[set]\nmax_iterations = 7\nstiffness = 1e7\n[grid]\nresolution = [2, 3]\n"
+                                 "scene = \"bar_hang\"\nsolvers = [\"mgpbd\"]\ntime_budget = 5\n"
+                                 "[set]\nform = \"dual\"\nmax_iterations = 7\nstiffness = 1e7\n[grid]\nresolution = [2, 3]\n"
                                  "[sizes.big]\ntime_budget = 50\nset.max_iterations = 70\ngrid.resolution = [4]\n"
                                  "grid.\"amg.strength_threshold\" = [0.0, 0.5]\n"
                                  "[sizes.other]\nset.stiffness = 1e9\n");
@@ -248,7 +248,7 @@ TEST(SweepCli, SigkillDuringSecondRunThenResume) {
   // Each run lasts its time budget (no tolerance can be met), so the second run is surely in
   // progress right after its start line; a run over its budget is a recorded status like any other.
   const std::string spec = write(d / "theta.toml", "scene = \"bar_hang\"\nsolvers = [\"" + theta_solver() +
-                                                       "\"]\nframes = 1\ntime_budget = 1.5\n[set]\nthreads = 1\n"
+                                                       "\"]\nframes = 1\ntime_budget = 1.5\n[set]\nform = \"dual\"\nthreads = 1\n"
                                                        "max_iterations = 100000000\nrtol = 0\natol = 0\n[grid]\n"
                                                        "\"amg.strength_threshold\" = [0.0, 0.1, 0.25]\n");
   const std::string out = (d / "theta.h5").string();

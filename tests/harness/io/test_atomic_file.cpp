@@ -1,8 +1,8 @@
 // A failed write of an output (a full disk), in process: the fault hook (io_fault.hpp) fails the
 // first, a middle and the last write call of a file, its flush and its rename; each must end in
 // one WriteError naming the file and the cause in words, with the earlier file byte-for-byte as it
-// was, no temporary file left and no HDF5 object left open (the crash of issue 33 was a file left
-// half-closed inside libhdf5).
+// was, no temporary file left and no HDF5 object left open (libhdf5 crashes at exit on a file left
+// half-closed inside it).
 #include "harness/io/atomic_file.hpp"
 #include "harness/io/io_fault.hpp"
 #include "harness/io/matrix_market.hpp"
