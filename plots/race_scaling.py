@@ -256,13 +256,13 @@ def read_json(path, default):
         return default
 
 
-def write(plt, scenes, data_dir, out):
-    """The figures and scale.md (see the module's docstring)."""
+def write(plt, scenes, data_dir, out, marker=None):
+    """The figures and scale.md (see the module's docstring), `marker` its first line."""
     race_dir = os.path.dirname(os.path.abspath(data_dir))
     for sc in scenes:
         if len(sc.order) >= 2:
             draw(plt, sc, out)
     text = page(scenes, read_json(os.path.join(race_dir, "machine.json"), []), read_json(os.path.join(race_dir, "plan.json"), []))
     with open(os.path.join(out, "scale.md"), "w") as fh:
-        fh.write(text)
+        fh.write((marker + "\n" if marker else "") + text)
     print(f"wrote {os.path.join(out, 'scale.md')}")
