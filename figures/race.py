@@ -7,10 +7,8 @@ usage: python3 figures/race.py [--bench build/xpbd-bench] [--spec figures/race/r
                                [--reference-jobs N] [--fresh] [--dry-run] [--quiet]
 
 Every entry (an outer method × a linear method × a forcing rule) is `xpbd-bench run` in a process
-of its own (a later run in the same process would reuse the earlier one's freed pages), into
-OUT/data/<scene>/<size>/<outer>.<linear>.<forcing>.h5; a run whose process wrote none leaves a
-.failed.json record (its exit code and last words) instead. A file or record that exists is a
-finished entry and is not run again (--fresh starts over).
+of its own, into OUT/data/<scene>/<size>/<outer>.<linear>.<forcing>.h5, or leaves a .failed.json
+record (its exit code and last words). An existing file or record is not run again (--fresh).
 
 One reference per (scene, size): a size's first process (its reference pass: one sweep of
 xpbd-jacobi with `--reference-file`) computes the reference of the judged substep into
