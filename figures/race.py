@@ -57,8 +57,8 @@ from race_spec import (check_spec, entries, entry_sets, frame_iterations,  # noq
 # Flags every run gets: --quiet when the race is (no live status line from xpbd-bench run).
 RUN_FLAGS = []
 # Each method at its best: CHOLMOD's BLAS on every core, as the OpenMP solvers are (the binary's
-# own default is one BLAS thread, safe on a loaded machine; at 270k on a quiet one two threads
-# factor 1.5x faster: docs/race.md). Runs record it as blas_threads; a value you set is kept.
+# own default is one BLAS thread, safe on a loaded machine; more threads factor faster on a quiet
+# one). Runs record it as blas_threads; a value you set is kept.
 RUN_ENV = dict(os.environ)
 RUN_ENV.setdefault("OPENBLAS_NUM_THREADS", str(os.cpu_count() or 1))
 TIMINGS = []  # OUT/timings.tsv
