@@ -28,6 +28,7 @@ import tomllib
 import numpy as np
 
 import race_pick
+import race_reference
 import race_rules as rules
 import race_scaling
 import xbruns
@@ -87,31 +88,6 @@ def load_entries(data_dir):
                     out.setdefault(scene, {}).setdefault(size, []).append(
                         dict(outer=parts[0], linear=parts[1], forcing=parts[2], run=run))
     return out
-
-
-def reference_passes(data_dir):
-    """{(scene, size): the attributes of the size's reference pass (figures/race.py)}."""
-    out = {}
-    for scene in sorted(os.listdir(data_dir)) if os.path.isdir(data_dir) else []:
-        for size in sorted(os.listdir(os.path.join(data_dir, scene))):
-            path = os.path.join(data_dir, scene, size, "_reference", "run.h5")
-            runs = xbruns.load(path, datasets=()) if os.path.isfile(path) else []
-            if runs:
-                out[(scene, size)] = runs[-1]["attrs"]
-    return out
-
-
-def reference_note(sc, s):
-    """How the size's reference was made, and how many entries read it rather than computing it."""
-    a = getattr(sc, "references", {}).get(s)
-    srcs = [str(e["run"].get("data", {}).get("reference/source", ["?"])[0]) for e in sc.sizes[s] if "data" in e["run"]]
-    read = sum(1 for x in srcs if x == "read")
-    text = f"{read} of {len(srcs)} entries read the size's stored reference"
-    if a:
-        verdict = "converged" if str(a.get("reference_substeps_unconverged", "1")) == "0" else "did not converge"
-        text = (f"reference computed once ({float(a.get('reference_time', math.nan)):.1f} s, its process's peak "
-                f"{float(a.get('peak_memory', math.nan)) / 1e9:.2f} GB; it {verdict}); " + text)
-    return text + "."
 
 
 def ordered(names, spec_order):
@@ -276,7 +252,7 @@ def size_table(sc, s):
                   xbruns.fmt(float(a.get("peak_memory", math.nan)) / 1e9), status_text(r),
                   reference_text(r) if "data" in r else "—", xbruns.fmt(float(a.get("load_average", math.nan)))]
         lines.append(row(cells))
-    notes = [reference_note(sc, s)] + [n for n in (lagged_note(e) for e in sc.sizes[s]) if n]
+    notes = [race_reference.note(sc, s)] + [n for n in (lagged_note(e) for e in sc.sizes[s]) if n]
     made = sorted(str(e["run"]["attrs"]["created"]) for e in sc.sizes[s] if "created" in e["run"]["attrs"])
     loads = [float(e["run"]["attrs"]["load_average"]) for e in sc.sizes[s] if "load_average" in e["run"]["attrs"]]
     if made:
@@ -374,7 +350,7 @@ def draw(data_dir, out, spec, readme=None, pick=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     scenes = [Scene(name, sizes, spec) for name, sizes in load_entries(data_dir).items()]
-    refs = reference_passes(data_dir)
+    refs = race_reference.passes(data_dir)
     for sc in scenes:
         sc.references = {size: a for (scene, size), a in refs.items() if scene == sc.name}
     if not scenes:
