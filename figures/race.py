@@ -51,7 +51,7 @@ import race as race_plots  # noqa: E402
 import race_plan as plan  # noqa: E402
 import race_rules as rules  # noqa: E402
 import xbruns  # noqa: E402
-from race_spec import (check_spec, entries, entry_sets, frame_iterations,  # noqa: E402,F401
+from race_spec import (check_spec, entries, entry_sets, expected_iterations, frame_iterations,  # noqa: E402,F401
                        reference_sets, set_args, sets_of, size_indices, LOCAL_MAX_ITERATIONS, STOP_KEYS)
 
 # Flags every run gets: --quiet when the race is (no live status line from xpbd-bench run).
@@ -201,14 +201,6 @@ def build_entries(args, spec, scenes, todo):
                 e.done = os.path.exists(path) or os.path.exists(failed_file(path))
                 out.append(e)
     return out
-
-
-def expected_iterations(spec, e):
-    """The outer iterations an entry is expected to take, for the prior."""
-    sc = spec["scenes"][e.scene]
-    if e.outer == plan.REFERENCE or spec["outer"].get(e.outer, {}).get("own_stop"):
-        return spec.get("plan", {}).get("newton_iterations", 8)
-    return spec.get("overrun", 3) * frame_iterations(sc, e.size)
 
 
 def replan(args, spec, es, show):

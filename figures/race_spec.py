@@ -8,6 +8,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "plots"))
 import race as race_plots  # noqa: E402
+import race_plan as plan  # noqa: E402
 import race_rules as rules  # noqa: E402
 
 LOCAL_MAX_ITERATIONS = 100000  # a sweep method stops on its time budget, not on a count
@@ -136,3 +137,11 @@ def check_spec(bench, spec):
                 if k not in spec["linear"]]
     if bad:
         sys.exit("race spec: " + "; ".join(bad))
+
+
+def expected_iterations(spec, e):
+    """The outer iterations an entry is expected to take, for the prior."""
+    sc = spec["scenes"][e.scene]
+    if e.outer == plan.REFERENCE or spec["outer"].get(e.outer, {}).get("own_stop"):
+        return spec.get("plan", {}).get("newton_iterations", 8)
+    return spec.get("overrun", 3) * frame_iterations(sc, e.size)

@@ -12,6 +12,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import xbruns  # noqa: E402
+import cloth_stretch  # noqa: E402
 from claim_data import DATA, failed, fmt, last_substep, runs_of  # noqa: E402
 import profile_claims  # noqa: E402
 
@@ -211,7 +212,7 @@ def claim_cloth(summary, files, notes, out):
         if failed(r):
             summary.add(claim, f"{r['attrs'].get('solver')} max strain", "—", f"not run: {status_note(r)}")
             continue
-        s, _, _ = xbruns.cloth_strains(r)
+        s, _, _ = cloth_stretch.cloth_strains(r)
         a = r["attrs"]
         summary.add(claim, f"{a.get('solver')}: max / mean edge strain (length/rest − 1) after {a.get('frames')} frames "
                      f"({a.get('resolution')}², stop at dual residual {a.get('atol')})",

@@ -17,9 +17,43 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import xbruns  # noqa: E402
+
+
+
+def cloth_strains(run):
+    """(per-edge strain |p−q|/l0 − 1, per-vertex largest strain, positions) of a cloth run.
+
+    Edges and rest lengths from the datasets distance_edges / distance_rest_length when the run
+    has them, else the grid of problems/generators make_cloth_grid(N) (vertex (i, k) = i·(N+1)+k,
+    edges along k, along i and one diagonal per quad) from the attributes resolution and size.
+    """
+    d = run["data"]
+    x = np.asarray(d["final_positions"], dtype=float).reshape(-1, 3)
+    if "distance_edges" in d and "distance_rest_length" in d:
+        e = np.asarray(d["distance_edges"]).astype(int).reshape(-1, 2)
+        l0 = np.asarray(d["distance_rest_length"], dtype=float)
+    else:
+        a = run["attrs"]
+        n, size = int(a["resolution"]), float(a["size"])
+        n1 = n + 1
+        if x.shape[0] != n1 * n1:
+            raise ValueError(f"{run['name']}: {x.shape[0]} positions, expected {n1 * n1} for a {n}x{n} cloth")
+        idx = np.arange(n1 * n1).reshape(n1, n1)
+        e = np.concatenate([np.stack([idx[:, :-1].ravel(), idx[:, 1:].ravel()], 1),
+                            np.stack([idx[:-1, :].ravel(), idx[1:, :].ravel()], 1),
+                            np.stack([idx[:-1, :-1].ravel(), idx[1:, 1:].ravel()], 1)])
+        k, i = np.meshgrid(np.arange(n1), np.arange(n1))
+        rest = np.stack([size * k.ravel() / n, np.zeros(n1 * n1), size * i.ravel() / n], 1)
+        l0 = np.linalg.norm(rest[e[:, 0]] - rest[e[:, 1]], axis=1)
+    s = np.linalg.norm(x[e[:, 0]] - x[e[:, 1]], axis=1) / l0 - 1.0
+    per_vertex = np.zeros(x.shape[0])
+    np.maximum.at(per_vertex, e[:, 0], s)
+    np.maximum.at(per_vertex, e[:, 1], s)
+    return s, per_vertex, x
 
 
 def main():
@@ -31,7 +65,7 @@ def main():
             if r["attrs"].get("scene") == "cloth_hang" and len(r["data"].get("final_positions", [])) > 0]
     if not runs:
         sys.exit(f"{a.results}: no cloth_hang runs with final positions")
-    data = [(r, *xbruns.cloth_strains(r)) for r in runs]
+    data = [(r, *cloth_strains(r)) for r in runs]
     vmax = max(float(pv.max()) for _, _, pv, _ in data) or 1e-12
     fig, axes = plt.subplots(1, len(data), figsize=(5.4 * len(data), 4.4), squeeze=False)
     for ax, (r, s, pv, x) in zip(axes[0], data):

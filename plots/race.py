@@ -17,8 +17,10 @@ markers in FILE (README.md's), so that publishing a race is one command. --pick 
 (docs/results/vbd_pick.md); summary.md has it too.
 """
 import argparse
+import json
 import math
 import os
+import re
 import shutil
 import sys
 import tomllib
@@ -26,26 +28,66 @@ import tomllib
 import numpy as np
 
 import race_pick
+import race_reference
 import race_rules as rules
 import race_scaling
 import xbruns
-from race_data import failure_record, load_entries, reference_passes, safe_name, toml_text  # noqa: F401 (figures/race.py)
 
+DATASETS = ("frame", "substep", "iteration", "wall_time", "relative_dual_residual", "linear_iterations",
+            rules.METRIC, "reference/source") + xbruns.REFERENCE_DATASETS
 README_BEGIN = "<!-- race table: begin (python3 plots/race.py DATA --readme README.md writes it) -->"
 README_END = "<!-- race table: end -->"
 
 
-def reference_note(sc, s):
-    """How the size's reference was made, and how many entries read it rather than computing it."""
-    a = getattr(sc, "references", {}).get(s)
-    srcs = [str(e["run"].get("data", {}).get("reference/source", ["?"])[0]) for e in sc.sizes[s] if "data" in e["run"]]
-    read = sum(1 for x in srcs if x == "read")
-    text = f"{read} of {len(srcs)} entries read the size's stored reference"
-    if a:
-        verdict = "converged" if str(a.get("reference_substeps_unconverged", "1")) == "0" else "did not converge"
-        text = (f"reference computed once ({float(a.get('reference_time', math.nan)):.1f} s, its process's peak "
-                f"{float(a.get('peak_memory', math.nan)) / 1e9:.2f} GB; it {verdict}); " + text)
-    return text + "."
+def datasets():
+    return tuple(d for d in DATASETS if d in xbruns.dataset_names())
+
+
+def toml_text(v):
+    """A value as --set text."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return repr(v) if isinstance(v, float) else str(v)
+
+
+def safe_name(label):
+    """A size label as a folder name (bunny:12k -> bunny_12k)."""
+    return re.sub(r"[^A-Za-z0-9._-]", "_", label)
+
+
+def failure_record(path, cmd, code, message, seconds, load=None):
+    with open(path, "w") as fh:
+        json.dump({"status": "failed", "exit": code, "message": message, "wall_time": seconds,
+                   "command": cmd, **({"load_average": load} if load is not None else {})}, fh)
+
+
+def load_entries(data_dir):
+    """{scene: {size: [entry]}}, entry = dict(outer, linear, forcing, run); a failure record's run
+    has attrs only (status failed, its exit code and message)."""
+    out = {}
+    if not os.path.isdir(data_dir):
+        return out
+    for scene in sorted(os.listdir(data_dir)):
+        for size in sorted(os.listdir(os.path.join(data_dir, scene))):
+            folder = os.path.join(data_dir, scene, size)
+            for f in sorted(os.listdir(folder)):
+                path = os.path.join(folder, f)
+                if f.endswith(".failed.json"):
+                    with open(path) as fh:
+                        run = {"attrs": json.load(fh)}
+                    stem = f[:-len(".failed.json")]
+                elif f.endswith(".h5") and not f.endswith(".part.h5") and os.path.isfile(path):
+                    runs = xbruns.load(path, datasets=datasets())
+                    if not runs:
+                        continue
+                    run, stem = runs[-1], f[:-3]
+                else:
+                    continue  # a run still going (.part.h5), the _state folder
+                parts = stem.rsplit(".", 2)
+                if len(parts) == 3:
+                    out.setdefault(scene, {}).setdefault(size, []).append(
+                        dict(outer=parts[0], linear=parts[1], forcing=parts[2], run=run))
+    return out
 
 
 def ordered(names, spec_order):
@@ -210,7 +252,7 @@ def size_table(sc, s):
                   xbruns.fmt(float(a.get("peak_memory", math.nan)) / 1e9), status_text(r),
                   reference_text(r) if "data" in r else "—", xbruns.fmt(float(a.get("load_average", math.nan)))]
         lines.append(row(cells))
-    notes = [reference_note(sc, s)] + [n for n in (lagged_note(e) for e in sc.sizes[s]) if n]
+    notes = [race_reference.note(sc, s)] + [n for n in (lagged_note(e) for e in sc.sizes[s]) if n]
     made = sorted(str(e["run"]["attrs"]["created"]) for e in sc.sizes[s] if "created" in e["run"]["attrs"])
     loads = [float(e["run"]["attrs"]["load_average"]) for e in sc.sizes[s] if "load_average" in e["run"]["attrs"]]
     if made:
@@ -316,7 +358,7 @@ def draw(data_dir, out, spec, readme=None, pick=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     scenes = [Scene(name, sizes, spec) for name, sizes in load_entries(data_dir).items()]
-    refs = reference_passes(data_dir)
+    refs = race_reference.passes(data_dir)
     for sc in scenes:
         sc.references = {size: a for (scene, size), a in refs.items() if scene == sc.name}
     if not scenes:

@@ -17,22 +17,30 @@ const SettingTable<BlockDescentSettings>& block_descent_settings() {
   using S = BlockDescentSettings;
   static const SettingTable<S> table = [] {
     SettingTable<S> t;
+    // Where a ground exists (ball_drop's own, or the scene key ground), and where AVBD keeps a
+    // multiplier and a ramped stiffness: the ground, rigid constraints, compliant distances.
+    const auto ground = [](const char* m) {
+      return std::vector<Scope>{on(m).where("scene=ball_drop").where("ground!=none"), on(m).where("ground!=none|builder")};
+    };
+    std::vector<Scope> augmented = ground("avbd");
+    augmented.push_back(on("avbd").where("scene=cloth_hang|mass_chain|heavy_rope|pendulum"));
+    augmented.push_back(on("avbd").where("variant=rigid"));
     const SettingTable<VbdSettings> vbd = {
         setting("vbd.init", "vbd, avbd: start of each substep (VBD 3.7): previous (x_t) | inertia (x_t + h v_t) | inertia_acceleration (x~ = x_t + h v_t + h^2 g) | adaptive (x_t + h v_t + h^2 a~ g, a~ = the last step's acceleration along g over |g|^2, in [0, 1])", &VbdSettings::init, {"previous", "inertia", "inertia_acceleration", "adaptive"}).applies({on("vbd,avbd")}),
         setting("vbd.acceleration", "vbd: after each sweep (VBD 3.8): none | chebyshev (x <- omega_n (x - x_{n-2}) + x_{n-2}, omega from vbd.rho)", &VbdSettings::acceleration, {"none", "chebyshev"}).applies({on("vbd")}),
         setting("vbd.rho", "vbd: chebyshev's spectral radius estimate rho", &VbdSettings::rho, 0, 0.9999).applies({on("vbd").where("vbd.acceleration=chebyshev")}),
         setting("vbd.projection", "vbd: each element Hessian of C^2/(2 alpha~) made PSD before its vertex block is taken: clamp | abs | none (a vertex whose 3x3 is then singular is skipped)", &VbdSettings::projection, {"clamp", "abs", "none"}).applies({on("vbd")}),
         setting("vbd.damping", "vbd: VBD's damping k_d, s (force -(k_d/h) H_i (x_i - x_i^t) per vertex; 0 = none)", &VbdSettings::damping, 0, 1e300).applies({on("vbd")}),
-        setting("vbd.contact_stiffness", "vbd: ground contact by penalty, k_c = this * m_p / h^2 per particle (N/m)", &VbdSettings::contact_stiffness, 1e-300, 1e300).applies({on("vbd")}),
+        setting("vbd.contact_stiffness", "vbd: ground contact by penalty, k_c = this * m_p / h^2 per particle (N/m)", &VbdSettings::contact_stiffness, 1e-300, 1e300).applies(ground("vbd")),
     };
     const SettingTable<AvbdSettings> avbd = {
-        setting("avbd.alpha", "avbd: rigid constraints correct (1 - alpha) of the error a step starts with; lambda warm start alpha*gamma", &AvbdSettings::alpha, 0, 1).applies({on("avbd")}),
+        setting("avbd.alpha", "avbd: rigid constraints correct (1 - alpha) of the error a step starts with; lambda warm start alpha*gamma", &AvbdSettings::alpha, 0, 1).applies(augmented),
         setting("avbd.gamma", "avbd: warm start of each step: lambda <- alpha gamma lambda, kappa <- max(gamma kappa, avbd.stiffness_start)", &AvbdSettings::gamma, 0, 1).applies({on("avbd")}),
         setting("avbd.beta", "avbd: stiffness ramp after each sweep, kappa <- kappa + beta |C|/c (c: a distance's rest length, 1 for a tet, the mean edge for contact)", &AvbdSettings::beta, 0, 1e300).applies({on("avbd")}),
         setting("avbd.stiffness_start", "avbd: kappa of a new constraint and the warm start's floor; k = kappa / sum_a w_a |grad_a C|^2 (mass units)", &AvbdSettings::stiffness_start, 1e-300, 1e300).applies({on("avbd")}),
-        setting("avbd.stiffness_max", "avbd: the ramp's cap on kappa", &AvbdSettings::stiffness_max, 1e-300, 1e300).applies({on("avbd")}),
+        setting("avbd.stiffness_max", "avbd: the ramp's cap on kappa", &AvbdSettings::stiffness_max, 1e-300, 1e300).applies(augmented),
         setting("avbd.hessian", "avbd: each vertex block's Hessian: projected (the geometric term f hess C made PSD, as vbd) | diagonal (AVBD's: |f| diag(column norms of hess C))", &AvbdSettings::hessian, {"projected", "diagonal"}).applies({on("avbd")}),
-        setting("avbd.compliant", "avbd: compliant constraints (alpha~ > 0): augmented (a multiplier too, exact for any k) | penalty (AVBD's: no multiplier, k ramped up to 1/alpha~)", &AvbdSettings::compliant, {"augmented", "penalty"}).applies({on("avbd")}),
+        setting("avbd.compliant", "avbd: compliant constraints (alpha~ > 0): augmented (a multiplier too, exact for any k) | penalty (AVBD's: no multiplier, k ramped up to 1/alpha~)", &AvbdSettings::compliant, {"augmented", "penalty"}).applies({on("avbd").where("scene=cloth_hang|mass_chain|heavy_rope|pendulum").where("variant!=rigid")}),
     };
     append_part(t, vbd, [](S& s) -> VbdSettings& { return s.vbd; });
     append_part(t, avbd, [](S& s) -> AvbdSettings& { return s.avbd; });

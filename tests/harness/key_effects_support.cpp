@@ -85,6 +85,13 @@ std::vector<Context> method_contexts() {
     if (!m.available) continue;
     if (m.local) {
       out.push_back({m.name, bar, m.name});
+      // Block descent's keys on contact and on compliant distances: the ball and the cloth.
+      if (m.name == "vbd" || m.name == "avbd")
+        for (const char* scene : {"ball_drop", "cloth_hang"}) {
+          Params q = tiny_scene(scene);
+          q.set_by_command.clear();
+          out.push_back({m.name + " " + scene, q, m.name});
+        }
       continue;
     }
     globals.push_back(m.name);
@@ -245,7 +252,7 @@ Outcome run_outcome(const Params& p, const std::string& method, bool reference) 
     o.counts = L.linear_iterations;
     o.counts.insert(o.counts.end(), L.reference_iterations.begin(), L.reference_iterations.end());
     for (const auto& [k, v] : r.stats)
-      if (k.find("time") == std::string::npos) o.stats[k] = v;
+      if (k.find("time") == std::string::npos && k != "peak_memory") o.stats[k] = v;  // the process's, not the run's
   } catch (const Error& e) {
     o.error = true;
     o.message = e.what();

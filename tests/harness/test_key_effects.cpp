@@ -61,10 +61,6 @@ const std::vector<std::tuple<std::string, std::string, std::string>> invisible =
     {"linear.forcing_alpha", "muelu", "its first CG iterations pass both tolerances alpha gives here"},
     {"linear.forcing_alpha", "lagged", "CG with a factor of a nearby matrix passes both tolerances alpha gives here"},
     {"atol", "vbd", "block descent's |grad E| (N) stays above every atol tried in this run's few sweeps"},
-    {"vbd.contact_stiffness", "vbd", "the twist bar has no ground (ball_drop's ground, or the scene key ground)"},
-    {"avbd.alpha", "avbd", "it acts on rigid constraints and the ground; the twist bar's tets are compliant, with no ground"},
-    {"avbd.stiffness_max", "avbd", "the ramp stays below the cap in this run's few sweeps"},
-    {"avbd.compliant", "avbd", "it acts on compliant distance constraints; tets keep the penalty form (docs/vbd.md)"},
     {"xpbd.line_search", "mgpbd newton",
      "armijo and robust_armijo part only where E cannot resolve a step; mgpbd's inexact steps stop short of that here"},
 };

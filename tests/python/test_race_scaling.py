@@ -26,8 +26,10 @@ def run(t_hit, rows, status="ok", peak=1e9):
     return {"attrs": {"status": status, "wall_time": wall, "outer_iterations": 2, "rows": rows, "peak_memory": peak},
             "data": {"iteration": np.arange(3), "frame": np.zeros(3, int), "substep": np.zeros(3, int),
                      "wall_time": np.array([0.0, wall / 2, wall]), "position_error": np.array(errors),
-                     "reference/status": np.array(["converged"]),
-                     "reference/relative_energy_gradient": np.array([1e-12])}}
+                     "reference/status": np.array(["converged"]), "reference/success": np.array([1]),
+                     "reference/relative_energy_gradient": np.array([1e-12]),
+                     "reference/certified": np.array([1]), "reference/certified_threshold": np.array([1e-6]),
+                     "reference/error_estimate": np.array([1e-8])}}
 
 
 def scene():
