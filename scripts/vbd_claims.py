@@ -16,7 +16,7 @@ Each (scene, variant) is one `xpbd-bench run` into OUT/<claim>/<scene>_<variant>
 file is reused; --fresh starts over); the table goes to stdout with the 1-min load at the start.
 Counts, not times, are the result: the machine's load changes times, not iterations. --data: the
 table as stamped data (plots/pages.py), which `python3 plots/pages.py publish FILE.json` makes a
-section of the generated page `vbd` in docs/results/ (made on the first publish).
+section of docs/results/vbd.md.
 """
 import argparse
 import os
