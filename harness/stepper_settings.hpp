@@ -44,10 +44,19 @@ struct StepperSettings {
   double exact_hessian_below = 1e-2;
   // step = newton's line search on E (harness/sim/energy_line_search.hpp): robust_armijo | armijo.
   std::string line_search = "robust_armijo";
+  // step = newton's globalisation (harness/sim/trust_region.hpp): line_search (the projection
+  // strategy's step, then xpbd.line_search) | trust_region (the exact Hessian's model in a region,
+  // its subproblem solved by trust_region_subproblem: steihaug | more_sorensen).
+  std::string globalization = "line_search";
+  std::string trust_region_subproblem = "steihaug";
   // The reference solution of --reference (harness/sim/reference.hpp): newton (Newton on E, the
   // backward-Euler solution; every α̃ > 0) | xpbd (XPBD's fixed point by CHOLMOD) | auto (newton
   // where every α̃ > 0, else xpbd).
   std::string reference_method = "auto";
+  // The newton reference's globalisation and, with trust_region, its subproblem solver (CHOLMOD's:
+  // steihaug preconditioned by the clamped K's factor, or more_sorensen).
+  std::string reference_globalization = "line_search";
+  std::string reference_trust_region_subproblem = "more_sorensen";
 };
 
 const SettingTable<StepperSettings>& stepper_settings();

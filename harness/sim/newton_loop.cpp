@@ -22,6 +22,12 @@ NewtonSettings NewtonSettings::from(const Params& p) {
   s.projection = p.hessian_projection;
   s.exact_below = p.exact_hessian_below;
   s.line_search = parse_line_search(p.line_search);
+  s.globalization = parse_globalization(p.globalization, "xpbd.globalization");
+  s.subproblem = parse_trust_region_subproblem(p.trust_region_subproblem, "xpbd.trust_region_subproblem");
+  s.linear_max_iterations = p.linear.max_iterations;
+  SolverSettings direct = p;
+  direct.cholmod.refactor = "always";
+  s.make_direct = [direct] { return make_linear_solver("cholmod", direct); };
   return s;
 }
 
@@ -30,7 +36,9 @@ NewtonLoop::NewtonLoop(const Problem& prob, const DualSystem& ds, GlobalStep& st
     : prob_(prob), ds_(ds), step_(step), alpha_tilde_(alpha_tilde), h_(h), s_(s),
       strategy_(prob, s.projection, s.exact_below), bounds_(prob),
       search_(prob, ds, alpha_tilde, h, s.line_search, &bounds_,
-              [this](const Eigen::Matrix3Xd& x, ConstraintState& st) { evaluate_at(x, st); }) {}
+              [this](const Eigen::Matrix3Xd& x, ConstraintState& st) { evaluate_at(x, st); }) {
+  if (s.globalization == Globalization::trust_region) make_trust_region();
+}
 
 // Through the element Hessians where there are (the step's `full`): their SVDs are kept for the
 // Hessian fill at the same point, one decomposition per element per iteration.
@@ -91,6 +99,7 @@ NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& 
   x = x_pred;
   bounds_.project(x);
   strategy_.begin_substep();
+  if (tr_) begin_trust_region();
   if (hooks.phase) hooks.phase("the constraint evaluation");
   evaluate(x, x_pred);
   StepRecord rec;
@@ -104,8 +113,10 @@ NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& 
     out.gradient = gn;
     out.floor = gradient_rounding_floor(prob_, ds_, state_, x, alpha_tilde_) / h2;
     out.iterations = it;
+    double twist_sum = INFINITY;
+    const int inverted = step_.elements() ? step_.elements()->inverted_tets(twist_sum) : 0;
     const NewtonIterate view{it, x, state_, lambda_, g_, gn, out.gradient0, out.floor, energy_,
-                             static_cast<int>(active_.size()), rec};
+                             static_cast<int>(active_.size()), inverted, twist_sum, rec};
     if (hooks.on_iterate) hooks.on_iterate(view);
     if (!std::isfinite(gn) || !std::isfinite(energy_) || !x.allFinite()) out.reason = StopReason::not_finite;
     else if (gn > divergence_factor * out.gradient0 && gn > s_.atol) out.reason = StopReason::diverged;
@@ -119,26 +130,44 @@ NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& 
     rec = StepRecord{};
     rec.tolerance = hooks.tolerance ? hooks.tolerance(it, gn) : 0;
     if (hooks.tolerance) step_.set_tolerance(rec.tolerance);
-    if (!direction(it, out.gradient0 > 0 ? gn / out.gradient0 : 0, x, rec, hooks, out)) return out;
-    if (hooks.phase) hooks.phase("the line search on E");
-    const double slope = particle_dot(prob_, g_, dx_) / h2;
-    const EnergySearch s = search_.search({x, dx_, g_, energy_}, x_pred, trial_);
-    rec.trials = s.trials;
-    if (!s.accepted) {
-      out.reason = gn <= floor_factor_failed * out.floor ? StopReason::rounding_floor : StopReason::line_search_failed;
+    const bool moved = tr_ ? trust_region_step(it, gn, x, x_pred, rec, hooks, out)
+                           : line_search_step(it, gn, x, x_pred, rec, hooks, out);
+    if (!moved) {
+      const bool rejected = out.reason == StopReason::line_search_failed || out.reason == StopReason::trust_region_failed;
+      if (rejected && gn <= floor_factor_failed * out.floor)
+        out.reason = StopReason::rounding_floor;
       return out;
     }
-    // The quadratic model's decrease along the (inexact) Newton step, −(t·s + t²/2·ΔxᵀKΔx) with
-    // ΔxᵀKΔx ≈ −s: for trust_region.
-    strategy_.after_step(energy_ - s.energy, -slope * s.t * (1 - s.t / 2));
-    rec.length = s.t;
-    std::swap(x, trial_.x);
-    std::swap(state_, trial_.state);
-    std::swap(lambda_, trial_.lambda);
-    std::swap(g_, trial_.g);
-    energy_ = s.energy;
     rec.time = clock.seconds();
   }
+}
+
+bool NewtonLoop::line_search_step(int it, double gradient, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred,
+                                  StepRecord& rec, const NewtonHooks& hooks, NewtonOutcome& out) {
+  const double h2 = h_ * h_;
+  if (!direction(it, out.gradient0 > 0 ? gradient / out.gradient0 : 0, x, rec, hooks, out)) return false;
+  if (hooks.phase) hooks.phase("the line search on E");
+  const double slope = particle_dot(prob_, g_, dx_) / h2;
+  const EnergySearch s = search_.search({x, dx_, g_, energy_}, x_pred, trial_);
+  rec.trials = s.trials;
+  if (!s.accepted) {
+    out.reason = StopReason::line_search_failed;
+    return false;
+  }
+  // The quadratic model's decrease along the (inexact) Newton step, −(t·s + t²/2·ΔxᵀKΔx) with
+  // ΔxᵀKΔx ≈ −s: for the projection strategy trust_region.
+  strategy_.after_step(energy_ - s.energy, -slope * s.t * (1 - s.t / 2));
+  rec.length = s.t;
+  accept_trial(x, s.energy);
+  return true;
+}
+
+void NewtonLoop::accept_trial(Eigen::Matrix3Xd& x, double energy) {
+  std::swap(x, trial_.x);
+  std::swap(state_, trial_.state);
+  std::swap(lambda_, trial_.lambda);
+  std::swap(g_, trial_.g);
+  energy_ = energy;
 }
 
 }  // namespace xb

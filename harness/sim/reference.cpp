@@ -23,12 +23,17 @@ std::string resolve_reference_method(const std::string& requested, const Eigen::
 }  // namespace
 
 std::string ReferenceSolver::description() const {
+  const std::string until = ", the ground planes as bounds (projected Newton), from x~, until |grad E| (free) <= 1e-10 of "
+                            "its value at x~ or at its rounding floor, at most 100 iterations; the iterate with the smallest "
+                            "|grad E| is the reference";
+  if (method_ == "newton" && newton_params_.reference_globalization == "trust_region")
+    return "newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's Newton loop "
+           "with a trust region on the exact Hessian (subproblem " + newton_params_.reference_trust_region_subproblem +
+           ", cholmod on the primal form)" + until;
   if (method_ == "newton")
     return std::string("newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's "
                        "Newton loop, cholmod on the primal form with the full geometric stiffness (xpbd.hessian_projection = ") +
-           projection + "), robust Armijo backtracking on E, the ground planes as bounds (projected Newton), from x~, "
-           "until |grad E| (free) <= 1e-10 of its value at x~ or at its rounding floor, at most 100 iterations; the "
-           "iterate with the smallest |grad E| is the reference";
+           projection + "), robust Armijo backtracking on E" + until;
   return "xpbd: cholmod (global direct solve of A dlambda = -(C + alpha~ lambda)), omega = 1, from the substep's "
          "predicted state x~ with lambda = 0, recomputed every substep from the run's own state; stops at a dual "
          "residual of 1e-10 relative or when it stops improving (no 1% gain in 5 iterations), at most 100 "
@@ -40,6 +45,13 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
       method_(resolve_reference_method(p.reference_method, alpha_tilde)), ds_(prob), newton_params_(p) {
   const MethodInfo* m = find_method("cholmod");
   if (!m || !m->available) throw Error("reference: the direct solver 'cholmod' is not available");
+  const bool region = p.reference_globalization == "trust_region";
+  if (!region && p.reference_trust_region_subproblem != StepperSettings{}.reference_trust_region_subproblem)
+    throw Error("reference.trust_region_subproblem=" + p.reference_trust_region_subproblem +
+                " needs reference.globalization=trust_region");
+  if (method_ == "xpbd" && region)
+    throw Error("reference.globalization=trust_region needs reference.method=newton (XPBD's fixed point has no energy to "
+                "globalise)");
   if (method_ == "xpbd") {
     direct_ = make_linear_solver("cholmod", p);
     return;
@@ -53,11 +65,15 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
   q.linear.forcing = "fixed";
   q.linear.stop_norm = "primal";  // CHOLMOD's one solve, no refinement rounds
   newton_.emplace(prob_, ds_, "cholmod", q, alpha_tilde_);
-  NewtonSettings s;
+  NewtonSettings s = NewtonSettings::from(q);
   s.rtol = target_relative;
   s.atol = 0;
   s.max_iterations = max_iterations;
   s.projection = projection;
+  s.exact_below = StepperSettings{}.exact_hessian_below;
+  s.line_search = LineSearchKind::robust_armijo;
+  s.globalization = parse_globalization(p.reference_globalization, "reference.globalization");
+  s.subproblem = parse_trust_region_subproblem(p.reference_trust_region_subproblem, "reference.trust_region_subproblem");
   loop_.emplace(prob_, ds_, *newton_, alpha_tilde_, h_, s);
 }
 

@@ -61,11 +61,28 @@ void Simulation::check_combination(const std::string& method) const {
   if (p_.hessian_projection != "clamp" && p_.hessian_projection != "abs" && !newton_)
     throw Error("xpbd.hessian_projection=" + p_.hessian_projection +
                 " needs step=newton (a strategy of Newton on E; XPBD's full geometric stiffness takes clamp or abs)");
+  check_globalization(method);
   if (newton_)
     for (long j = 0; j < alpha_tilde_.size(); ++j)
       if (!(alpha_tilde_[j] > 0))
         throw Error("step=newton needs every constraint compliant (alpha~ > 0): E(x) has no term for constraint " +
                     std::to_string(j) + " of compliance 0 (use step=fixed)");
+}
+
+// The trust region's keys (harness/sim/trust_region.hpp) where they apply, and only there.
+void Simulation::check_globalization(const std::string& method) const {
+  const bool region = p_.globalization == "trust_region";
+  if (region && !newton_)
+    throw Error("xpbd.globalization=trust_region needs step=newton (a globalisation of Newton on E); --profile newton sets it");
+  if (!region && p_.trust_region_subproblem != "steihaug")
+    throw Error("xpbd.trust_region_subproblem=" + p_.trust_region_subproblem +
+                " needs xpbd.globalization=trust_region (the line search solves no subproblem)");
+  if (region && p_.trust_region_subproblem == "more_sorensen" && method != "cholmod")
+    throw Error("xpbd.trust_region_subproblem=more_sorensen factorises K + sigma M by CHOLMOD: it needs --solver cholmod "
+                "(with '" + method + "' use xpbd.trust_region_subproblem=steihaug, preconditioned by it)");
+  if (region && p_.line_search != "robust_armijo")
+    throw Error("xpbd.line_search=" + p_.line_search + " has no effect under xpbd.globalization=trust_region (the ratio of "
+                "actual to predicted decrease judges each step)");
 }
 
 RunResult Simulation::run() {
@@ -186,6 +203,8 @@ void Simulation::end_substep(const std::string& status) {
     ++rounding_floor_;
   } else if (status == "line_search_failed") {
     ++search_failures_;
+  } else if (status == "trust_region_failed") {
+    ++region_failures_;
   } else {
     ++max_iteration_substeps_;
   }
@@ -197,6 +216,11 @@ void Simulation::finish() {
     res_.message = std::to_string(search_failures_) + " of " + std::to_string(res_.substeps_total) +
                    " substeps ended on a failed line search on E (no step of 1, 1/2, ..., 1e-9 passed it, with |grad E| "
                    "above its rounding floor)";
+  } else if (res_.status == "ok" && region_failures_ > 0) {
+    res_.status = "trust_region_failed";
+    res_.message = std::to_string(region_failures_) + " of " + std::to_string(res_.substeps_total) +
+                   " substeps ended with the trust region collapsed (every step rejected until its radius fell below "
+                   "1e-12 of its first, with |grad E| above its rounding floor)";
   } else if (res_.status == "ok" && max_iteration_substeps_ > 0) {
     res_.status = "max_iterations";
     res_.message = std::to_string(max_iteration_substeps_) + " of " + std::to_string(res_.substeps_total) +

@@ -53,6 +53,7 @@ class Simulation {
   Residuals log_state(int frame, int sub, int it, const LastStep& last);
   void log_entry(int frame, int sub, int it, const Entry& e, const LastStep& last);
   void log_linear(const LastStep& last, int it);
+  void log_trust_region(const LastStep& s);  // xpbd.globalization = trust_region's entries
   // λ += Δλ, x += (ω or the line search's t)·Δx by Params::step; returns the step length.
   double apply_global_step(LastStep& last);
   // Ends the substep: the count of its status and `substep_status`.
@@ -61,6 +62,7 @@ class Simulation {
   StepEnd step(int frame, int sub, int it, double residual, LastStep& last);
   LinearStats global_solve(int frame, int sub, int it, LastStep& last);
   void check_combination(const std::string& method) const;
+  void check_globalization(const std::string& method) const;
   void fail(const std::string& status, const std::string& msg) {
     res_.status = status;
     res_.message = msg;
@@ -99,6 +101,7 @@ class Simulation {
   bool first_setup_ = true, stop_ = false;
   int max_iteration_substeps_ = 0;
   int search_failures_ = 0;  // substeps ended by a failed line search on E
+  int region_failures_ = 0;  // substeps ended by a collapsed trust region
   int rounding_floor_ = 0;   // substeps ended at the rounding floor of ‖∇E‖
   // Where the run is, for an out-of-memory message (std::bad_alloc says nothing).
   std::string phase_ = "the set-up of the run";

@@ -9,6 +9,7 @@ std::string stop_reason_name(StopReason r) {
     case StopReason::rounding_floor: return "rounding_floor";
     case StopReason::max_iterations: return "max_iterations";
     case StopReason::line_search_failed: return "line_search_failed";
+    case StopReason::trust_region_failed: return "trust_region_failed";
     case StopReason::solver_failed: return "solver_failed";
     case StopReason::not_finite: return "not_finite";
     case StopReason::diverged: return "diverged";

@@ -13,6 +13,7 @@ enum class StopReason {
   rounding_floor,      // ‖∇E‖ within its own rounding error (newton.hpp: gradient_rounding_floor): success
   max_iterations,      // the iteration limit, above both
   line_search_failed,  // no step passed the line search and ‖∇E‖ is above its rounding floor
+  trust_region_failed, // the trust region's radius collapsed with every step rejected, above the floor
   solver_failed,       // the linear solve broke down on the most projected Hessian too
   not_finite,          // a non-finite position, energy or gradient
   diverged,            // ‖∇E‖ grew 1e8-fold over its first value
