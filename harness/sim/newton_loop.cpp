@@ -93,10 +93,11 @@ bool NewtonLoop::direction(int it, double relative, const Eigen::Matrix3Xd& x, S
   }
 }
 
-NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const NewtonHooks& hooks) {
+NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const NewtonHooks& hooks,
+                                   const Eigen::Matrix3Xd* start) {
   NewtonOutcome out;
   const double h2 = h_ * h_;
-  x = x_pred;
+  x = start ? *start : x_pred;
   bounds_.project(x);
   strategy_.begin_substep();
   if (tr_) begin_trust_region();
@@ -124,13 +125,19 @@ NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& 
     else if (gn <= floor_factor * out.floor) out.reason = StopReason::rounding_floor;
     else if (it >= s_.max_iterations) out.reason = StopReason::max_iterations;
     else if (hooks.proceed && !hooks.proceed()) out.reason = StopReason::interrupted;
-    if (out.reason != StopReason::running) return out;
+    const bool solved = stop_reason_success(out.reason);
+    if (out.reason != StopReason::running && !(solved && tr_ && it < s_.max_iterations)) return out;
 
     Timer clock;
     rec = StepRecord{};
     rec.tolerance = hooks.tolerance ? hooks.tolerance(it, gn) : 0;
     if (hooks.tolerance) step_.set_tolerance(rec.tolerance);
-    const bool moved = tr_ ? trust_region_step(it, gn, x, x_pred, rec, hooks, out)
+    if (tr_) {  // the trust region's models; a gradient at its tolerance with negative curvature is a saddle
+      if (!trust_region_models(it, x, rec, hooks, out)) return out;
+      if (solved && !trust_region_saddle()) return out;
+      out.reason = StopReason::running;
+    }
+    const bool moved = tr_ ? trust_region_step(it, x, x_pred, rec, hooks, out)
                            : line_search_step(it, gn, x, x_pred, rec, hooks, out);
     if (!moved) {
       const bool rejected = out.reason == StopReason::line_search_failed || out.reason == StopReason::trust_region_failed;

@@ -67,7 +67,7 @@ struct StepRecord {
   bool boundary = false;         // on the region's boundary
   bool negative_curvature = false;  // along a direction of negative curvature (CG's or an element mode)
   int rejected = 0;              // steps rejected before it (ρ ≤ η)
-  double shift = 0;              // more_sorensen: σ of K + σM
+  double shift = 0;              // more_sorensen: σ of K + σK_c
   double curvature = 0;          // the smallest Rayleigh quotient of an element mode in K (< 0: K indefinite)
 };
 
@@ -108,8 +108,10 @@ class NewtonLoop {
   // prob, ds, step and alpha_tilde must outlive the loop; `step` is a GlobalStep of step = newton.
   NewtonLoop(const Problem& prob, const DualSystem& ds, GlobalStep& step, const Eigen::VectorXd& alpha_tilde, double h,
              const NewtonSettings& s);
-  // Minimises E from x̃ (projected onto the bounds); x ends at the last iterate.
-  NewtonOutcome minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const NewtonHooks& hooks);
+  // Minimises E from x̃, or from `start` where given (either projected onto the bounds); x ends
+  // at the last iterate.
+  NewtonOutcome minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const NewtonHooks& hooks,
+                         const Eigen::Matrix3Xd* start = nullptr);
   const ProjectionStrategy& strategy() const { return strategy_; }
 
  private:
@@ -125,8 +127,12 @@ class NewtonLoop {
   // The trust region's models at x: the exact K, the preconditioner, the modes, the first radius.
   bool trust_region_models(int it, const Eigen::Matrix3Xd& x, StepRecord& rec, const NewtonHooks& hooks,
                            NewtonOutcome& out);
-  bool trust_region_step(int it, double gradient, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, StepRecord& rec,
+  // A step on the models trust_region_models() made at x.
+  bool trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, StepRecord& rec,
                          const NewtonHooks& hooks, NewtonOutcome& out);
+  // Whether the models found negative curvature in K (an element mode's Rayleigh quotient < 0):
+  // then ‖∇E‖ at its tolerance is a saddle, not a minimiser, and the trust region goes on.
+  bool trust_region_saddle() const;
   void accept_trial(Eigen::Matrix3Xd& x, double energy);  // x, state, λ, g ← the trial's
   void make_trust_region();
   void begin_trust_region();  // a new substep: its first iteration sets the radius

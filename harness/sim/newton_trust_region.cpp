@@ -70,16 +70,18 @@ void improve_along_modes(const SparseMatrix& K, const SparseMatrix* Kc, const Pr
 struct NewtonLoop::TrustRegionState {
   TrustRegionState(const Problem& prob, const NewtonSettings& s) : exact(constraint_graph(prob)) {
     if (s.subproblem == TrustRegionSubproblem::more_sorensen) {
-      if (!s.make_direct) throw Error("xpbd.trust_region_subproblem=more_sorensen: no direct solver to factorise K + sigma M");
+      clamped.emplace(constraint_graph(prob));
+      if (!s.make_direct) throw Error("xpbd.trust_region_subproblem=more_sorensen: no direct solver to factorise K + sigma K_c");
       ms.emplace(s.make_direct());
     }
     const auto& free = exact.free_particles();
-    D.resize(3 * static_cast<long>(free.size()));
-    for (size_t i = 0; i < free.size(); ++i) D.segment<3>(3 * i).setConstant(1.0 / prob.particles.w[free[i]]);
+    mass.resize(3 * static_cast<long>(free.size()));
+    for (size_t i = 0; i < free.size(); ++i) mass.segment<3>(3 * i).setConstant(1.0 / prob.particles.w[free[i]]);
   }
-  PrimalSystem exact;               // K = h²∇²E, unprojected
-  std::optional<MoreSorensen> ms;   // more_sorensen
-  Vector D;                         // the mass per free dof (more_sorensen's norm, the modes' scale)
+  PrimalSystem exact;                    // K = h²∇²E, unprojected
+  std::optional<PrimalSystem> clamped;   // more_sorensen: K_c, every element clamped (the region's norm)
+  std::optional<MoreSorensen> ms;        // more_sorensen
+  Vector mass;                           // per free dof (the modes' scale)
   Vector g, p, w, v, Kv;            // per dof
   std::vector<int> held;            // K's rows held (contact)
   double radius = 0, first_radius = 0;
@@ -101,7 +103,7 @@ struct NewtonLoop::TrustRegionState {
       sp = {&cg->p, cg->model, cg->norm, 0, nc_exit || cg->exit == SteihaugExit::boundary, nc_exit};
       return true;
     }
-    msr = ms->solve(K, D, g, radius, nc.best.size() ? &nc.best : nullptr);
+    msr = ms->solve(K, RegionNorm{nullptr, &clamped->K()}, g, radius, nc.best.size() ? &nc.best : nullptr);
     rec.linear.iterations += msr->factorisations;
     if (!msr->ok) {
       message = "More-Sorensen: " + msr->message;
@@ -156,6 +158,11 @@ bool NewtonLoop::trust_region_models(int it, const Eigen::Matrix3Xd& x, StepReco
         for (int d : held) z[d] = 0;
       };
   }
+  if (tr.clamped) {  // more_sorensen: K_c, the region's norm
+    rec.hessians += step_.prepare(in);
+    tr.clamped->fill_energy_hessian(eh.blocks());
+    tr.clamped->fix_dofs(tr.held);
+  }
   if (hooks.phase) hooks.phase("the exact Hessian of the trust region's model");
   proj.base = Projection::none;
   rec.hessians += step_.prepare(in);
@@ -168,24 +175,28 @@ bool NewtonLoop::trust_region_models(int it, const Eigen::Matrix3Xd& x, StepReco
   for (int d : tr.held) tr.g[d] = 0;
   tr.nc = NegativeCurvature{};
   if (eh.indefinite_elements() > 0)
-    tr.nc = negative_curvature(prob_, eh, x, alpha_tilde_, tr.exact, tr.exact.K(), tr.D, tr.g, tr.held, max_mode_candidates);
+    tr.nc = negative_curvature(prob_, eh, x, alpha_tilde_, tr.exact, tr.exact.K(), tr.mass, tr.g, tr.held, max_mode_candidates);
   rec.curvature = tr.nc.smallest;
-  if (tr.radius == 0) {  // the substep's first: the preconditioned (or mass-scaled) gradient step's length
-    if (steihaug && tr.P) {
+  if (tr.radius == 0) {  // the substep's first: the Cauchy point's length along z = P⁻¹g, in the region's norm
+    if (tr.P)
       tr.P(tr.g, tr.w);
-      tr.radius = std::sqrt(std::max(0.0, dot(tr.g, tr.w)));
-    } else {
-      tr.radius = steihaug ? tr.g.norm() : std::sqrt((tr.g.array().square() / tr.D.array()).sum());
-    }
+    else if (tr.clamped)
+      tr.w = tr.g.cwiseQuotient(diagonal(tr.clamped->K()));  // Jacobi's z; its K_c-norm by one product
+    else
+      tr.w = tr.g;
+    const double gz = std::max(0.0, dot(tr.g, tr.w)), zKz = spmv_dot(tr.exact.K(), tr.w, tr.v);
+    const double zz = tr.clamped ? RegionNorm{nullptr, &tr.clamped->K()}.dot(tr.w, tr.w) : tr.P ? gz : dot(tr.w, tr.w);
+    tr.radius = (zKz > 0 ? gz / zKz : 1.0) * std::sqrt(zz);
     tr.first_radius = tr.radius;
   }
   return true;
 }
 
-bool NewtonLoop::trust_region_step(int it, double gradient, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred,
-                                   StepRecord& rec, const NewtonHooks& hooks, NewtonOutcome& out) {
-  (void)gradient;
-  if (!trust_region_models(it, x, rec, hooks, out)) return false;
+bool NewtonLoop::trust_region_saddle() const { return tr_->nc.smallest < 0; }
+
+bool NewtonLoop::trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, StepRecord& rec,
+                                   const NewtonHooks& hooks, NewtonOutcome& out) {
+  (void)it;
   TrustRegionState& tr = *tr_;
   const auto& free = tr.exact.free_particles();
   const long nb = static_cast<long>(free.size());

@@ -78,7 +78,7 @@ void Simulation::check_globalization(const std::string& method) const {
     throw Error("xpbd.trust_region_subproblem=" + p_.trust_region_subproblem +
                 " needs xpbd.globalization=trust_region (the line search solves no subproblem)");
   if (region && p_.trust_region_subproblem == "more_sorensen" && method != "cholmod")
-    throw Error("xpbd.trust_region_subproblem=more_sorensen factorises K + sigma M by CHOLMOD: it needs --solver cholmod "
+    throw Error("xpbd.trust_region_subproblem=more_sorensen factorises K + sigma K_c by CHOLMOD: it needs --solver cholmod "
                 "(with '" + method + "' use xpbd.trust_region_subproblem=steihaug, preconditioned by it)");
   if (region && p_.line_search != "robust_armijo")
     throw Error("xpbd.line_search=" + p_.line_search + " has no effect under xpbd.globalization=trust_region (the ratio of "

@@ -9,11 +9,12 @@
 // The subproblem (xpbd.trust_region_subproblem):
 //   steihaug        Steihaug–Toint CG on K (solvers/krylov/steihaug.hpp), preconditioned by the
 //                   run's linear method set up on the clamped K (mgpbd's V-cycle, Jacobi, CHOLMOD's
-//                   factor); the region in that preconditioner's norm; an interior step is carried
-//                   on to the boundary along the elements' negative-curvature modes where that
-//                   lowers the model (harness/sim/negative_curvature.hpp)
-//   more_sorensen   K + σM factorised by CHOLMOD, σ by the secular equation
-//                   (solvers/direct/more_sorensen.hpp); the region in the mass norm ‖p‖_M
+//                   factor); the region in that preconditioner's norm (K_c's with CHOLMOD); the step
+//                   against the elements' negative-curvature modes, alone or from an interior step to
+//                   the boundary, whichever lowers the model most (harness/sim/negative_curvature.hpp)
+//   more_sorensen   K + σK_c factorised by CHOLMOD, σ by the secular equation
+//                   (solvers/direct/more_sorensen.hpp); the region in the clamped K's norm ‖p‖_{K_c},
+//                   so that its path runs from the clamped Newton step (σ → ∞) to the exact one (σ = 0)
 // Where E's computed change is within its rounding, the decrease is measured by the trapezoid rule on
 // the gradients, as the robust line search does (energy_line_search.hpp).
 #pragma once
