@@ -30,7 +30,7 @@ const SettingTable<StepperSettings>& stepper_settings() {
       setting("xpbd.exact_hessian_below", "adaptive projection: relative |grad E| below which the exact Hessian is tried", &S::exact_hessian_below, 0, 1),
       setting("reference.method", "--reference solution: newton (Newton on E with cholmod to |grad E| <= 1e-10 relative, every alpha~ > 0) | xpbd (XPBD's fixed point by cholmod) | auto (newton where every alpha~ > 0, else xpbd)", &S::reference_method, {"auto", "newton", "xpbd"}),
       setting("reference.globalization", "the newton reference's globalisation: line_search (progressive projection, robust Armijo) | trust_region (the exact Hessian in a trust region: reference.trust_region_subproblem)", &S::reference_globalization, {"line_search", "trust_region"}),
-      setting("reference.trust_region_subproblem", "reference.globalization = trust_region's subproblem solver: more_sorensen (K + sigma K_c by CHOLMOD) | steihaug (Steihaug-Toint CG preconditioned by CHOLMOD's factor of the clamped K)", &S::reference_trust_region_subproblem, {"more_sorensen", "steihaug"}),
+      setting("reference.trust_region_subproblem", "reference.globalization = trust_region's subproblem solver: steihaug (Steihaug-Toint CG preconditioned by CHOLMOD's factor of the clamped K) | more_sorensen (K + sigma K_c by CHOLMOD)", &S::reference_trust_region_subproblem, {"steihaug", "more_sorensen"}),
   };
   return table;
 }

@@ -56,7 +56,7 @@ struct StepperSettings {
   // The newton reference's globalisation and, with trust_region, its subproblem solver (CHOLMOD's:
   // steihaug preconditioned by the clamped K's factor, or more_sorensen).
   std::string reference_globalization = "line_search";
-  std::string reference_trust_region_subproblem = "more_sorensen";
+  std::string reference_trust_region_subproblem = "steihaug";
 };
 
 const SettingTable<StepperSettings>& stepper_settings();
