@@ -170,6 +170,9 @@ int main(int argc, char** argv) {
                   mass_norm_distance(prob, x, y) / mass_norm_distance(prob, y, x_pred),
                   incremental_energy(prob, sx, x, x_pred, h), incremental_energy(prob, sy, y, x_pred, h),
                   energy_gradient_norm(prob, ds, sy, y, x_pred, at, h) / g_pred);
+      if (!o.start.empty())
+        std::printf("compare: the start's |x_start - x_cmp|_M/|x_cmp - x~|_M = %.4g\n",
+                    mass_norm_distance(prob, start, y) / mass_norm_distance(prob, y, x_pred));
     }
     hessian_inertia(prob, p, x, at, o.bracket);
     if (!o.save_end.empty()) write_state(o.save_end, SimState{1, x, (x - prob.particles.x) / h}, p);

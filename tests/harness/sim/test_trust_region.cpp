@@ -133,6 +133,7 @@ TEST(TrustRegion, ReachesTheMinimiserFromTheSaddlesAxis) {
 TEST(TrustRegion, RecordsPerIterationOnTheSquash) {
   for (const std::string sub : {"steihaug", "more_sorensen"}) {
     Params p = newton_params("squash");
+    p.resolution = 6;
     p.globalization = "trust_region";
     p.trust_region_subproblem = sub;
     RunOptions opt;
