@@ -13,7 +13,7 @@ JOBS   ?= $(shell nproc)
 export OMP_WAIT_POLICY ?= passive
 export GOMP_SPINCOUNT ?= 10000
 
-.PHONY: setup build demo test test-asan fuzz clean figures race race-full perf perf-baseline
+.PHONY: setup build demo test test-asan fuzz clean figures race race-scale race-full perf perf-baseline
 
 setup:
 	@bash scripts/setup.sh
@@ -26,11 +26,16 @@ build: setup
 	@$(PYTHON) scripts/link_python_package.py $(BUILD)
 
 # The paper's Fig. 8 scene: one-sweep XPBD stalls where the global solves converge; every global
-# method in both forms of its linear step (dual A dlambda = b, primal K dx = J^T alpha~^-1 b).
+# method in both forms of its linear step (dual A dlambda = b, primal K dx = J^T alpha~^-1 b). Then
+# on the truth (--reference): XPBD Gauss-Seidel, VBD and AVBD (400 sweeps) and Newton with CHOLMOD,
+# their position error against wall time (plots/demo_truth.png; docs/vbd.md).
 demo: build
 	@mkdir -p results plots
 	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-jacobi,xpbd-gs,jacobi-pcg,cholmod,mgpbd --form dual,primal --out results/demo.h5
 	$(PYTHON) plots/convergence.py results/demo.h5 -o plots/demo_convergence.png
+	$(BUILD)/xpbd-bench run --scene cloth_hang --solver xpbd-gs,vbd,avbd --reference --set rtol=0 --set atol=0 --set max_iterations=400 --out results/demo_truth.h5
+	$(BUILD)/xpbd-bench run --scene cloth_hang --profile newton --solver cholmod --reference --out results/demo_truth.h5 --append
+	$(PYTHON) plots/error_time.py results/demo_truth.h5 -o plots/demo_truth.png
 
 # The paper's claims (figures/*.toml, one spec per figure; FIGURES_SIZE=paper applies each spec's
 # [sizes.paper] table): figures/run.py runs the sweeps into
@@ -41,16 +46,23 @@ figures: build
 	$(PYTHON) figures/run.py --bench $(BUILD)/xpbd-bench --size $(FIGURES_SIZE) $(FIGURES_ARGS)
 
 # The race on the truth (figures/race/race.toml, docs/race.md): outer methods (XPBD, its two
-# variants, Newton) x linear methods, one process per run, each with --reference; the time to a
-# position error of 1e-2 and 1e-4 against the backward-Euler solution, into plots/race/
-# (race_<scene>.png, summary.md, timings.tsv). `race`: one size per scene (the spec's quick_size)
-# and Eisenstat-Walker only (10-20 minutes on a quiet 2-core machine, references included);
-# `race-full`: every size and forcing rule (squash to 850K tets: hours). Both resume (finished runs
-# are kept); RACE_ARGS="--fresh", "--only squash", "--outer newton", "--linear mgpbd,cholmod".
-# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md
+# variants, Newton; VBD and AVBD with their own sweeps, docs/vbd.md) x linear methods, one process per run, each reading its size's one reference
+# (computed once per size); the time to a position error of 1e-2, 1e-3 and 1e-4 against the
+# backward-Euler solution, into plots/race/ (race_<scene>.png, summary.md, timings.tsv, plan.txt).
+# `race`: one size per scene (the spec's quick_size) and Eisenstat-Walker only; `race-scale`: every
+# size (the squash to 1.6M tets, the twist bar to 255K, the cloth to 512^2) with Eisenstat-Walker,
+# each entry under a predicted time budget and a memory limit, cut to the spec's plan.total_seconds
+# (2 h) of machine time in all; `race-full`: every size and forcing rule, no total. All resume
+# (finished runs are kept): run them in parts. RACE_ARGS="--dry-run" prints the plan (each entry's
+# predicted time and memory, what is skipped or cut and why) and stops; "--fresh", "--only squash",
+# "--outer newton", "--linear mgpbd,cholmod", "--reference-jobs 2" (references first, in parallel).
+# Publishing: python3 plots/race.py plots/race/data --out docs/race --readme README.md --pick docs/results/vbd_pick.md
 RACE_ARGS ?=
 race: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --quick $(RACE_ARGS)
+
+race-scale: build
+	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench --scale $(RACE_ARGS)
 
 race-full: build
 	$(PYTHON) figures/race.py --bench $(BUILD)/xpbd-bench $(RACE_ARGS)

@@ -2,13 +2,15 @@
 """`make figures`: run the sweep specs under figures/ and reproduce the paper's claims.
 
 usage: python3 figures/run.py [--bench build/xpbd-bench] [--size default|paper] [--only a,b]
-                              [--out plots/figures] [--dry-run] [--fresh] [--quiet]
+                              [--out plots/figures] [--dry-run] [--fresh] [--quiet] [--data FILE.json]
 
 For each spec figures/NAME.toml it runs `xpbd-bench sweep SPEC --size SIZE --out
 OUT/data/SIZE/NAME.h5` (a spec's [sizes.paper] table says what changes at the paper's size;
 resumable: a rerun skips finished runs), then plots/claims.py draws the figures into OUT/ and this
 driver writes OUT/summary.md with every measured number beside the paper's (numbers from
-shared/paper/paper_and_code_notes.md). A spec whose scene, solvers or meshes are missing is run
+shared/paper/paper_and_code_notes.md), and the same as stamped data, OUT/claims.json (the machine,
+its triad and load taken when this driver starts; the runs' own dates and loads beside them), which
+`python3 plots/pages.py publish OUT/claims.json` makes docs/results/claims.md. A spec whose scene, solvers or meshes are missing is run
 with what exists; a claim whose inputs are missing is reported as "not run: <reason>", never
 dropped. Exit status 0 unless the harness itself cannot be run. On a terminal a status line
 (tqdm) follows each sweep: runs done / total, the current run, elapsed and ETA; --quiet: none.
@@ -29,6 +31,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "plots"))
 import claims  # noqa: E402
+import pages  # noqa: E402
 
 SPECS = ["squash_xpbd", "squash_mgpbd", "scaling", "near_kernel", "setup_interval", "twist_bar",
          "cloth_stretch", "theta", "stiffness", "error_time", "dual_primal", "dual_primal_bar"]
@@ -199,6 +202,46 @@ def run_spec(name, args, inventory, notes, profile=""):
 
 
 
+def runs_made(files):
+    """When the results behind the summary were measured and under what load, from the runs' own
+    attributes (a rerun resumes: older runs stay)."""
+    import h5py
+    made, loads = [], []
+    for path in sorted({p for p in files.values() if p}):
+        try:
+            with h5py.File(path, "r") as f:
+                for g in f.get("runs", {}).values():
+                    c, lo = g.attrs.get("created"), g.attrs.get("load_average")
+                    made += [c.decode() if isinstance(c, bytes) else str(c)] if c is not None else []
+                    loads += [float(lo)] if lo is not None else []
+        except OSError:
+            continue
+    if not made:
+        return "No runs were found in the results files."
+    load = f"; 1-min load at their start {min(loads):.2f}–{max(loads):.2f}" if loads else ""
+    return f"The {len(made)} runs behind it were made {min(made)} – {max(made)}{load}."
+
+
+def write_data(S, args, files, stamp_):
+    """The summary as a stamped data file for plots/pages.py (docs/results/claims.md once published)."""
+    path = args.data or os.path.join(args.out, "claims.json")
+    text = [runs_made(files), "Paper numbers: the authors' data (RTX 4090, float32); ours: this machine's CPU."]
+    if S.verdicts:
+        text += ["**Verdicts**", "\n".join(f"- **{c}**: {t}" for c, t in S.verdicts)]
+    text += [f"**{title}**\n\n{body.strip()}" for title, body in S.sections]
+    text += ["**Definitions**: relative dual residual: ‖C + α̃λ‖ over its value at the substep's first evaluation; "
+             "time to 1e-2: wall time of the first substep until the relative dual residual ≤ 1e-2; twist-bar "
+             "relative energy: ‖x − x̃‖²_M/(2h²) + Σ C²/(2α) over its value at x̃; scaling: wall_time / "
+             "outer_iterations against rows (= tets)."]
+    tables = [pages.table(["claim", "quantity", "paper", "measured", "note"], S.rows)]
+    if S.paired:
+        tables.append(pages.table(["claim", "quantity", "paper", "authors' profile", "harness (true metric)"],
+                                  S.paired, "Each claim under the authors' profile and under the harness's metric"))
+    pages.write_data(path, "claims", "The paper's claims, measured", f"`make figures`, size {args.size}", stamp_,
+                     tables, "\n\n".join(text))
+    print(f"wrote {path} (publish: python3 plots/pages.py publish {path})")
+
+
 def write_summary(S, args, notes, files, elapsed):
     path = os.path.join(args.out, "summary.md")
     with open(path, "w") as f:
@@ -252,10 +295,13 @@ def main():
                     help="delete the selected specs' results first (a rerun otherwise keeps every finished run, "
                          "failed ones included, e.g. from an older build)")
     ap.add_argument("--quiet", action="store_true", help="no status line on a terminal")
+    ap.add_argument("--data", default="", help="the stamped data file for plots/pages.py (default OUT/claims.json)")
     args = ap.parse_args()
     if not os.access(args.bench, os.X_OK):
         sys.exit(f"figures: {args.bench} is not an executable (build first: make build, or --bench PATH)")
     os.makedirs(args.out, exist_ok=True)
+    stamp_ = pages.stamp(f"python3 figures/run.py --size {args.size}" + (f" --only {args.only}" if args.only else ""),
+                         microbench=os.path.join(os.path.dirname(args.bench), "xb_microbench"))
     t0 = time.time()
     inventory = bench_inventory(args.bench)
     only = [s for s in args.only.split(",") if s]
@@ -288,6 +334,7 @@ def main():
         except Exception as ex:  # a broken claim must not hide the others
             S.add(fn.__name__.replace("claim_", ""), "—", "—", f"not measured: {type(ex).__name__}: {ex}")
     write_summary(S, args, notes, files, time.time() - t0)
+    write_data(S, args, files, stamp_)
 
 
 if __name__ == "__main__":

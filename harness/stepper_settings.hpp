@@ -39,7 +39,7 @@ struct StepperSettings {
   // eigenvalues to 0) | abs (to their absolute value) | adaptive (step = newton: clamp until ‖∇E‖ falls
   // below exact_hessian_below of its first value, then the exact Hessian while it gives a descent
   // direction, clamp again for a step where it does not).
-  // on_demand, progressive and trust_region are strategies of step = newton (harness/sim/hessian_projection.hpp).
+  // on_demand, progressive and rho_switch are strategies of step = newton (harness/sim/hessian_projection.hpp).
   std::string hessian_projection = "clamp";
   double exact_hessian_below = 1e-2;
   // step = newton's line search on E (harness/sim/energy_line_search.hpp): robust_armijo | armijo.
@@ -53,8 +53,12 @@ struct StepperSettings {
   // backward-Euler solution; every α̃ > 0) | xpbd (XPBD's fixed point by CHOLMOD) | auto (newton
   // where every α̃ > 0, else xpbd).
   std::string reference_method = "auto";
-  // The newton reference's globalisation and, with trust_region, its subproblem solver (CHOLMOD's:
-  // steihaug preconditioned by the clamped K's factor, or more_sorensen).
+  // The linear method of the newton reference's solves: cholmod (exact) | mgpbd | jacobi-pcg
+  // (iterative, to a tolerance that Eisenstat–Walker tightens to 1e-12: for sizes whose factor does
+  // not fit the machine). The reference's stop test on ‖∇E‖ is the same.
+  std::string reference_linear = "cholmod";
+  // The newton reference's globalisation and, with trust_region, its subproblem solver (steihaug
+  // preconditioned by reference.linear on the clamped K, or more_sorensen by CHOLMOD).
   std::string reference_globalization = "line_search";
   std::string reference_trust_region_subproblem = "steihaug";
 };

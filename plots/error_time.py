@@ -5,12 +5,14 @@ usage: python3 plots/error_time.py RESULTS.h5 [-o OUT.png] [--frame F] [--subste
                                    [--absolute]
 
 Left: the relative position error ||x - x_ref||_M / ||x_ref - x~||_M (dataset position_error,
-written by `run --reference` or `reference = true` in a sweep spec); right: the relative dual
-residual (--absolute: the dual residual). Both against wall time in seconds. By default one
+written by `run --reference` or `reference = true` in a sweep spec); right: each run's own stop
+measure, relative (the dual residual; ‖∇E‖ under Newton, vbd and avbd: xbruns.own_key), or with
+--absolute the dual residual. Both against wall time in seconds. By default one
 substep (frame 0, substep 0), whose clock starts at 0; --all concatenates every substep with a
 running clock. Runs without a reference get only the residual panel. Writes OUT (PNG) and a PDF.
 """
 import argparse
+import math
 import os
 import sys
 
@@ -26,6 +28,23 @@ import xbruns  # noqa: E402
 ERROR_FLOOR = 1e-16  # zeros (exact agreement) are drawn here
 
 
+def reference_floor(run, a):
+    """(the finest position error the reference of the plotted substep can judge, why the curve is
+    not to be trusted at all or ""): its certified threshold; with --all the worst of them."""
+    d = run["data"]
+    if a.all:
+        th = np.asarray(d.get("reference/certified_threshold", [math.inf]), dtype=float)
+        ok = all(xbruns.reference_verdict(run, i)[0] for i in range(len(th)))
+        return (float(np.max(th)) if len(th) else math.inf), ("" if ok else "reference unconverged")
+    i = xbruns.substep_index(run, a.frame, a.substep)
+    if i is None:
+        return math.inf, "no reference"
+    ok, why = xbruns.reference_verdict(run, i)
+    th = d.get("reference/certified_threshold")
+    floor = float(th[i]) if th is not None and len(th) > i else math.inf
+    return floor, ("" if ok else "reference unconverged") or ("" if math.isfinite(floor) else "reference not certified")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("results")
@@ -38,7 +57,9 @@ def main():
     a = ap.parse_args()
 
     runs = xbruns.load(a.results, datasets=("frame", "substep", "iteration", "dual_residual",
-                                            "relative_dual_residual", "wall_time", "position_error"))
+                                            "relative_dual_residual", "authors_relative_dual_residual",
+                                            "relative_newton_residual", "wall_time", "position_error")
+                       + xbruns.REFERENCE_DATASETS)
     runs = [r for r in runs if "dual_residual" in r["data"] and len(r["data"]["dual_residual"])]
     if not runs:
         sys.exit(f"{a.results}: no simulation runs with residuals")
@@ -63,14 +84,21 @@ def main():
         status = r["attrs"].get("status", "")
         if status not in ("ok", "max_iterations"):
             lab += f" [{status}]"
-        res = np.asarray(r["data"]["dual_residual" if a.absolute else "relative_dual_residual"])[m]
+        judge = reference_floor(r, a) if "position_error" in r["data"] else None
+        res = np.asarray(r["data"]["dual_residual" if a.absolute else xbruns.own_key(r)])[m]
         line, = ax_res.loglog(np.maximum(t[m], 1e-6), np.maximum(res, ERROR_FLOOR), label=lab, lw=1.6)
         if ax_err is not None and "position_error" in r["data"]:
             e = np.asarray(r["data"]["position_error"])[m]
             # An exact match (the reference method itself) is drawn at the floor, not at 1e-300.
-            ax_err.loglog(np.maximum(t[m], 1e-6), np.maximum(e, ERROR_FLOOR), color=line.get_color(), label=lab, lw=1.6)
+            floor, why = judge
+            ax_err.loglog(np.maximum(t[m], 1e-6), np.maximum(e, ERROR_FLOOR), color=line.get_color(),
+                          label=lab + (f" [{why}]" if why else ""), lw=1.6, ls="-" if not why else ":")
+            # Below the finest error the reference can judge (100 × its own error estimate) the
+            # curve says nothing: the dashed line marks it.
+            if math.isfinite(floor):
+                ax_err.axhline(max(floor, ERROR_FLOOR), color=line.get_color(), lw=0.8, ls="--")
     ax_res.set_xlabel("wall time (s)")
-    ax_res.set_ylabel("dual residual" if a.absolute else "relative dual residual")
+    ax_res.set_ylabel("dual residual" if a.absolute else "relative stop measure (dual residual, or |grad E|)")
     ax_res.grid(True, which="both", alpha=0.3)
     if ax_err is not None:
         ax_err.set_xlabel("wall time (s)")

@@ -2,6 +2,7 @@
 """The race's figures and summary (figures/race.py runs it; this redraws from its data).
 
 usage: python3 plots/race.py DATA_DIR [--out plots/race] [--spec figures/race/race.toml] [--readme README.md]
+                              [--pick docs/results/vbd_pick.md]
 
 DATA_DIR holds <scene>/<size>/<outer>.<linear>.<forcing>.h5, one run each (with --reference), and a
 <outer>.<linear>.<forcing>.failed.json record for a run whose process left none. The rules (the
@@ -11,7 +12,9 @@ position error against the backward-Euler solution against wall time within the 
 outer method, a panel per size, a line per linear method at its best forcing rule) and writes
 OUT/summary.md; a DATA_DIR/../timings.tsv is copied to OUT. --readme FILE: the headline table
 (time to each threshold of each outer method at its best) replaces the one between the race-table
-markers in FILE (README.md's), so that publishing a race is one command.
+markers in FILE (README.md's), so that publishing a race is one command. --pick FILE: the spec's
+[pick] comparison ("XPBD, VBD, Newton: which to pick", plots/race_pick.py) as a generated page
+(docs/results/vbd_pick.md); summary.md has it too.
 """
 import argparse
 import json
@@ -24,11 +27,13 @@ import tomllib
 
 import numpy as np
 
+import race_pick
 import race_rules as rules
+import race_scaling
 import xbruns
 
 DATASETS = ("frame", "substep", "iteration", "wall_time", "relative_dual_residual", "linear_iterations",
-            rules.METRIC) + xbruns.REFERENCE_DATASETS
+            rules.METRIC, "reference/source") + xbruns.REFERENCE_DATASETS
 README_BEGIN = "<!-- race table: begin (python3 plots/race.py DATA --readme README.md writes it) -->"
 README_END = "<!-- race table: end -->"
 
@@ -49,10 +54,10 @@ def safe_name(label):
     return re.sub(r"[^A-Za-z0-9._-]", "_", label)
 
 
-def failure_record(path, cmd, code, message, seconds):
+def failure_record(path, cmd, code, message, seconds, load=None):
     with open(path, "w") as fh:
         json.dump({"status": "failed", "exit": code, "message": message, "wall_time": seconds,
-                   "command": cmd}, fh)
+                   "command": cmd, **({"load_average": load} if load is not None else {})}, fh)
 
 
 def load_entries(data_dir):
@@ -84,6 +89,31 @@ def load_entries(data_dir):
     return out
 
 
+def reference_passes(data_dir):
+    """{(scene, size): the attributes of the size's reference pass (figures/race.py)}."""
+    out = {}
+    for scene in sorted(os.listdir(data_dir)) if os.path.isdir(data_dir) else []:
+        for size in sorted(os.listdir(os.path.join(data_dir, scene))):
+            path = os.path.join(data_dir, scene, size, "_reference", "run.h5")
+            runs = xbruns.load(path, datasets=()) if os.path.isfile(path) else []
+            if runs:
+                out[(scene, size)] = runs[-1]["attrs"]
+    return out
+
+
+def reference_note(sc, s):
+    """How the size's reference was made, and how many entries read it rather than computing it."""
+    a = getattr(sc, "references", {}).get(s)
+    srcs = [str(e["run"].get("data", {}).get("reference/source", ["?"])[0]) for e in sc.sizes[s] if "data" in e["run"]]
+    read = sum(1 for x in srcs if x == "read")
+    text = f"{read} of {len(srcs)} entries read the size's stored reference"
+    if a:
+        verdict = "converged" if str(a.get("reference_substeps_unconverged", "1")) == "0" else "did not converge"
+        text = (f"reference computed once ({float(a.get('reference_time', math.nan)):.1f} s, its process's peak "
+                f"{float(a.get('peak_memory', math.nan)) / 1e9:.2f} GB; it {verdict}); " + text)
+    return text + "."
+
+
 def ordered(names, spec_order):
     return [n for n in spec_order if n in names] + sorted(set(names) - set(spec_order))
 
@@ -93,7 +123,7 @@ class Scene:
 
     def __init__(self, name, sizes, spec):
         self.name, self.spec = name, spec
-        self.thresholds = sorted(spec.get("thresholds", [1e-2, 1e-4]), reverse=True)
+        self.thresholds = sorted(spec.get("thresholds", [1e-2, 1e-3, 1e-4]), reverse=True)
         order = [safe_name(z["label"]) for z in spec.get("scenes", {}).get(name, {}).get("sizes", [])]
         self.order = ordered(sizes, order)
         self.sizes = {s: sizes[s] for s in self.order}
@@ -148,9 +178,9 @@ def draw_scene(plt, sc, out):
                 ser = rules.series(e["run"])
                 if oo != o or ser is None:
                     continue
-                ok, _ = xbruns.reference_verdict(e["run"])
+                ok, why = xbruns.reference_trusted(e["run"], min(sc.thresholds))
                 ax.semilogy(ser[0], np.maximum(ser[1], 1e-300), "-" if ok else ":", color=colours[m], marker=".", ms=3,
-                            lw=1.4, label=tag(e) + ("" if ok else " (reference unconverged)"))
+                            lw=1.4, label=tag(e) + ("" if ok else f" ({why.split(' (')[0].split(':')[0]})"))
             for t in sc.thresholds:
                 ax.axhline(t, color="black", lw=0.8, ls=":")
             ax.set_ylim(min(sc.thresholds) * 1e-3, 2.0)  # a converged run's 1e-16 would flatten the race
@@ -189,8 +219,19 @@ def status_text(run):
 
 
 def reference_text(run):
+    """The reference's verdict and certificate: "converged, certified: error ≤ 3e-09 (trusted to
+    3e-07)", or why not."""
     ok, why = xbruns.reference_verdict(run)
-    return "converged" if ok else why
+    if not ok:
+        return why
+    d = run.get("data", {})
+    cert, est = d.get("reference/certified"), d.get("reference/error_estimate")
+    if cert is None or est is None or len(cert) == 0:
+        return "converged, no certificate recorded"
+    if not int(cert[0]):
+        note = d.get("reference/certificate_note")
+        return "converged, not certified" + (f": {note[0]}" if note is not None and len(note) and str(note[0]) else "")
+    return f"converged, certified: error ≤ {float(est[0]):.2g} (trusted to {100 * float(est[0]):.2g})"
 
 
 def lagged_note(e):
@@ -220,7 +261,8 @@ def row(cells):
 def size_table(sc, s):
     ths = sc.thresholds
     head = ["outer method", "linear", "forcing"] + [f"time to {t:g} s" for t in ths] + \
-        ["smallest error", "wall s", "reference s", "outer its", "s / outer it.", "linear its", "status", "reference", "load"]
+        ["smallest error", "wall s", "reference s", "outer its", "s / outer it.", "linear its", "peak GB", "status",
+         "reference", "load"]
     lines = [f"### {s} ({sc.rows(s)} dual rows)", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
 
     def key(e):
@@ -230,10 +272,11 @@ def size_table(sc, s):
         cells = [sc.outer_label(e["outer"]), e["linear"], e["forcing"]] + [cell(e, t, False) for t in ths]
         cells += [xbruns.fmt(rules.smallest_error(r)), xbruns.fmt(float(a.get("wall_time", math.nan))),
                   xbruns.fmt(float(a.get("reference_time", math.nan))), str(a.get("outer_iterations", "—")),
-                  xbruns.fmt(rules.per_iteration(r)), xbruns.fmt(mean_linear_iterations(r)), status_text(r),
+                  xbruns.fmt(rules.per_iteration(r)), xbruns.fmt(mean_linear_iterations(r)),
+                  xbruns.fmt(float(a.get("peak_memory", math.nan)) / 1e9), status_text(r),
                   reference_text(r) if "data" in r else "—", xbruns.fmt(float(a.get("load_average", math.nan)))]
         lines.append(row(cells))
-    notes = [n for n in (lagged_note(e) for e in sc.sizes[s]) if n]
+    notes = [reference_note(sc, s)] + [n for n in (lagged_note(e) for e in sc.sizes[s]) if n]
     made = sorted(str(e["run"]["attrs"]["created"]) for e in sc.sizes[s] if "created" in e["run"]["attrs"])
     loads = [float(e["run"]["attrs"]["load_average"]) for e in sc.sizes[s] if "load_average" in e["run"]["attrs"]]
     if made:
@@ -242,33 +285,56 @@ def size_table(sc, s):
     return lines + [""] + [f"- {n}" for n in notes] + ([""] if notes else [])
 
 
+def outer_cell(sc, s, o):
+    """Each threshold's time of outer method o's fastest entry at size s, " / "-separated; the
+    linear method once where one wins every threshold."""
+    es = [(t, sc.outer_first(s, o, t)) for t in sc.thresholds]
+    if all(e is None for _, e in es):
+        return ""
+    tags = {tag(e) for t, e in es if e is not None and rules.verdict(e["run"], t)[0] is not None}
+    if len(tags) <= 1:
+        text = " / ".join(cell(e, t, False) for t, e in es)
+        if len(set(text.split(" / "))) == 1 and text.startswith("—"):
+            text = text.split(" / ")[0]
+        return text + (f" ({tags.pop()})" if tags else "")
+    return " / ".join(cell(e, t) for t, e in es)
+
+
 def headline(scenes):
-    """Per scene, size and threshold: each outer method at its best (the linear method in brackets)."""
+    """Per scene and size: each outer method at its best, its time to every threshold (the linear
+    method in brackets)."""
     outers = list(dict.fromkeys(o for sc in scenes for o in sc.outers))
     labels = {o: next(sc.outer_label(o) for sc in scenes if o in sc.outers) for o in outers}
-    lines = ["| scene, size (dual rows) | position error | " + " | ".join(labels[o] for o in outers) + " |",
-             "|---|---|" + "---|" * len(outers)]
+    ths = sorted({t for sc in scenes for t in sc.thresholds}, reverse=True)
+    lines = [f"Each cell: s to a position error of {' / '.join(f'{t:g}' for t in ths)}.", "",
+             "| scene, size (dual rows) | " + " | ".join(labels[o] for o in outers) + " |",
+             "|---|" + "---|" * len(outers)]
     for sc in scenes:
         for s in sc.order:
-            for t in sc.thresholds:
-                cells = [cell(sc.outer_first(s, o, t), t) if o in sc.outers else "" for o in outers]
-                lines.append(row([f"{sc.name} {s} ({sc.rows(s)})", f"{t:g}"] + cells))
+            cells = [outer_cell(sc, s, o) if o in sc.outers else "" for o in outers]
+            lines.append(row([f"{sc.name} {s} ({sc.rows(s)})"] + cells))
     return lines
 
 
 RULES = ("Each entry (an outer method with a linear method and a forcing rule; EW: linear.forcing = "
-         "eisenstat_walker) in its own process, with `--reference`: the position error is the distance to the "
+         "eisenstat_walker) in its own process, reading its size's one reference (`--reference-file`, computed once "
+         "per size): the position error is the distance to the "
          "backward-Euler solution of the substep, ‖x − x_ref‖_M / ‖x_ref − x̃‖_M. `time to e`: the wall time within "
          "the frame (the reference's time is not in it) at which the error first is at most e; — (v): never, v the "
          "smallest error the run reached; — (reference unconverged …): the reference did not converge in that substep, "
-         "so there is nothing true to time against. Rules: plots/race_rules.py; spec: figures/race/race.toml.")
+         "so there is nothing true to time against; — (reference not fine enough): the reference's own error "
+         "estimate (its certificate, results/README.md) is above e/100, so a time to e would be a time to the "
+         "reference's own error. Rules: plots/race_rules.py; spec: figures/race/race.toml.")
 
 
-def summary(scenes):
+def summary(scenes, spec=None):
     lines = ["# The race on the truth: time to a position error", "", RULES, "",
              "## Each outer method at its best", "",
              "Time (s) to each position error of each outer method's fastest entry (its linear method in brackets).", ""]
     lines += [provenance(scenes), ""] + headline(scenes) + [""]
+    pick = race_pick.section(scenes, spec or {})
+    if pick:
+        lines += ["## " + (spec["pick"].get("title", "Which to pick")), ""] + pick + [""]
     for sc in scenes:
         lines += [f"## {sc.name}", ""]
         for s in sc.order:
@@ -303,11 +369,14 @@ def write_readme(path, scenes):
     print(f"wrote the race table into {path}")
 
 
-def draw(data_dir, out, spec, readme=None):
+def draw(data_dir, out, spec, readme=None, pick=None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     scenes = [Scene(name, sizes, spec) for name, sizes in load_entries(data_dir).items()]
+    refs = reference_passes(data_dir)
+    for sc in scenes:
+        sc.references = {size: a for (scene, size), a in refs.items() if scene == sc.name}
     if not scenes:
         print(f"race: no runs under {data_dir}", file=sys.stderr)
         return
@@ -315,13 +384,17 @@ def draw(data_dir, out, spec, readme=None):
     for sc in scenes:
         draw_scene(plt, sc, out)
     with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write(summary(scenes))
-    timings = os.path.join(os.path.dirname(os.path.abspath(data_dir)), "timings.tsv")
-    if os.path.exists(timings) and os.path.abspath(out) != os.path.dirname(os.path.abspath(data_dir)):
-        shutil.copyfile(timings, os.path.join(out, "timings.tsv"))
+        fh.write(summary(scenes, spec))
+    race_scaling.write(plt, scenes, data_dir, out)
+    for name in ("timings.tsv", "plan.txt"):
+        src = os.path.join(os.path.dirname(os.path.abspath(data_dir)), name)
+        if os.path.exists(src) and os.path.abspath(out) != os.path.dirname(os.path.abspath(data_dir)):
+            shutil.copyfile(src, os.path.join(out, name))
     print(f"wrote {os.path.join(out, 'summary.md')}")
     if readme:
         write_readme(readme, scenes)
+    if pick:
+        race_pick.write(pick, scenes, spec, data_dir)
 
 
 def main():
@@ -331,10 +404,11 @@ def main():
     ap.add_argument("--out", default=os.path.join(here, "race"))
     ap.add_argument("--spec", default=os.path.join(os.path.dirname(here), "figures", "race", "race.toml"))
     ap.add_argument("--readme", default=None, help="a file with the race-table markers (README.md)")
+    ap.add_argument("--pick", default=None, help="write the [pick] comparison as this generated page")
     args = ap.parse_args()
     with open(args.spec, "rb") as fh:
         spec = tomllib.load(fh)
-    draw(args.data, args.out, spec, args.readme)
+    draw(args.data, args.out, spec, args.readme, args.pick)
 
 
 if __name__ == "__main__":

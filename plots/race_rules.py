@@ -9,7 +9,10 @@ summarises by them, so the two cannot disagree about a run's verdict.
   clock: the reference's time is not in it) at the first entry whose `position_error` is at most e.
   None where no entry is ("never": the summary gives the smallest error reached), where the run's
   reference did not converge in that substep (nothing true to time against:
-  `xbruns.reference_verdict` says so, and why), or where the run left no data (its process failed).
+  `xbruns.reference_verdict` says so, and why), where it is not certified to e — its error
+  estimate above e/100, or no certificate ("reference not fine enough", `xbruns.reference_trusted`:
+  a time would be a time to the reference's own error) — or where the run left no data (its
+  process failed).
 - The best of a set of entries (`best`): the one that reaches the smallest threshold first; among
   those that never do, the one that reaches the next threshold first, and so on; then the smallest
   error reached. An outer method's best at one threshold (`first_to`): its entry that reaches that
@@ -26,6 +29,7 @@ import xbruns
 ANCHOR = ("xpbd", "cholmod")
 METRIC = "position_error"
 NEVER, UNCONVERGED, NO_DATA, NO_REFERENCE = "never", "reference unconverged", "no data", "no reference"
+NOT_FINE, UNCERTIFIED = xbruns.NOT_FINE, "reference not certified"
 
 
 def status(run):
@@ -57,7 +61,8 @@ def smallest_error(run):
 
 def verdict(run, threshold):
     """(seconds, why) of a run against one threshold: (t, "") where it reached it at t; (None,
-    NEVER | UNCONVERGED | NO_DATA | NO_REFERENCE) where it did not, or where nothing can say."""
+    NEVER | UNCONVERGED | NOT_FINE | UNCERTIFIED | NO_DATA | NO_REFERENCE) where it did not, or
+    where nothing can say."""
     d = run.get("data") if run else None
     if not d or len(d.get("iteration", [])) == 0:
         return None, NO_DATA
@@ -67,6 +72,9 @@ def verdict(run, threshold):
     converged, _ = xbruns.reference_verdict(run)
     if not converged:
         return None, UNCONVERGED
+    trusted, why = xbruns.reference_trusted(run, threshold)
+    if not trusted:
+        return None, NOT_FINE if why.startswith(NOT_FINE) else UNCERTIFIED
     hit = np.flatnonzero(s[1] <= threshold)
     return (float(s[0][hit[0]]), "") if len(hit) else (None, NEVER)
 

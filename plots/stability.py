@@ -5,7 +5,8 @@ usage: python3 plots/stability.py RESULTS.h5 [-o OUT.png] [--case KEY[,KEY...]]
 
 Cases are the values of --case (default: the attribute `variant` where runs differ in it, else the
 swept keys of a sweep, else the scene). Each cell is coloured by status (ok, max_iterations,
-timeout, diverged, nan, breakdown, error) and shows it with the final relative dual residual;
+over_budget, out_of_memory, diverged, nan, breakdown, error) and shows it with the final relative value of the run's
+own stop measure (the dual residual; ‖∇E‖ under Newton, vbd and avbd: final_relative_convergence);
 with repeats, the worst status is shown. Writes PNG and PDF and prints the table.
 """
 import argparse
@@ -50,7 +51,7 @@ def main():
         case = " ".join(f"{k}={xbruns.fmt(at.get(k, '-'))}" if len(keys) > 1 or k not in ("variant", "scene")
                         else str(at.get(k, "-")) for k in keys)
         cells.setdefault((at.get("solver", "?"), case), []).append(
-            (at.get("status", "error"), xbruns.as_number(at.get("relative_dual_residual"))))
+            (at.get("status", "error"), xbruns.as_number(at.get("final_relative_convergence", at.get("relative_dual_residual")))))
     solvers = sorted({s for s, _ in cells})
     cases = sorted({c for _, c in cells}, key=lambda c: [(xbruns.as_number(p.split("=")[-1]) is None,
                                                           xbruns.as_number(p.split("=")[-1]) or 0, p)

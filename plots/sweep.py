@@ -5,8 +5,8 @@ usage: python3 plots/sweep.py RESULTS.h5 [-o OUT.png] [--metric M] [--x KEY] [--
                               [--tol T] [--frame F] [--substep S]
 
 metrics: outer_iterations (attribute, all substeps), iterations_to_tolerance and
-time_to_tolerance (first outer iteration / wall time of one substep at which the relative dual
-residual <= --tol, default the run's rtol), final_dual_residual, relative_dual_residual,
+time_to_tolerance (first outer iteration / wall time of one substep at which the run's own relative
+stop measure <= --tol, default the run's rtol: the dual residual, ‖∇E‖ under Newton, vbd and avbd), final_dual_residual, relative_dual_residual,
 wall_time, status, or any other numeric run attribute. --x/--y default to the run's swept keys
 (attribute sweep_params). With one key: one line per solver; with two: one heat map per solver.
 Repeats of a point are summarised by their median (status: the worst). Writes PNG and PDF.
@@ -34,7 +34,7 @@ def metric_value(run, metric, tol, frame, substep):
         return a.get("status", "error")
     if metric in ("iterations_to_tolerance", "time_to_tolerance"):
         t = tol if tol is not None else float(a.get("rtol", 1e-6))
-        it, sec = xbruns.to_tolerance(run, t, frame, substep)
+        it, sec = xbruns.to_tolerance(run, t, frame, substep, metric="own")
         return it if metric == "iterations_to_tolerance" else sec
     v = xbruns.as_number(a.get(metric))
     return math.nan if v is None else v

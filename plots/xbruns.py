@@ -9,13 +9,17 @@ import json
 import math
 import os
 import sys
+import urllib.parse
 
 import h5py
 import numpy as np
 
-STATUS_ORDER = ["ok", "max_iterations", "timeout", "diverged", "nan", "breakdown", "error"]
-STATUS_COLOURS = {"ok": "#4caf50", "max_iterations": "#ffc107", "timeout": "#ff9800", "diverged": "#e53935",
-                  "nan": "#8e0000", "breakdown": "#8e24aa", "error": "#757575"}
+# over_budget was called timeout before (older files); out_of_memory: past run --memory-limit.
+STATUS_ORDER = ["ok", "max_iterations", "over_budget", "timeout", "out_of_memory", "diverged", "nan", "breakdown",
+                "error"]
+STATUS_COLOURS = {"ok": "#4caf50", "max_iterations": "#ffc107", "over_budget": "#ff9800", "timeout": "#ff9800",
+                  "out_of_memory": "#6d4c41", "diverged": "#e53935", "nan": "#8e0000", "breakdown": "#8e24aa",
+                  "error": "#757575"}
 
 
 def _text(v):
@@ -40,25 +44,100 @@ def dataset_names(level="simulation"):
     return {d["name"] for d in schema()["datasets"] if d["level"] in ("any", level)}
 
 
+def _link_target(index, filename):
+    """Where an external link of the index at `index` (a real path) points, as the harness resolves
+    it (results/README.md): "<x>.runs/<rest>" is in INDEX.runs/, another relative name beside the
+    index; never the working directory."""
+    if os.path.isabs(filename):
+        return filename
+    first, _, rest = filename.replace(os.sep, "/").partition("/")
+    if first.endswith(".runs") and len(first) > 5:
+        return os.path.join(index + ".runs", rest)
+    return os.path.join(os.path.dirname(index), filename)
+
+
+def _one_line(e):
+    text = str(e).strip().splitlines()
+    return text[0] if text else type(e).__name__
+
+
+def run_groups(path, skipped):
+    """(name, h5py group) of every run of a results file, as `report` and xpbd_bench.read read it:
+    the run files of its store (PATH.runs/<store>/, whatever the file is called now), or the runs
+    the file holds or links itself (a packed or older file). Each run file is open only while its
+    run is in hand. A run that cannot be read is named in `skipped` ("PATH: run NAME: why") and left
+    out. Exits with one line for a file that is missing, not HDF5 or without /runs."""
+    if not os.path.exists(path):
+        sys.exit(f"{path}: no such file")
+    real = os.path.realpath(path)
+    try:
+        f = h5py.File(real, "r")
+    except OSError as e:
+        sys.exit(f"{path}: not a readable HDF5 file ({_one_line(e)})")
+    with f:
+        if "runs" not in f or not isinstance(f.get("runs", getlink=False), h5py.Group):
+            sys.exit(f"{path}: no /runs group (not an xpbd-bench results file?)")
+        store = _text(f.attrs.get("store", ""))
+        listed = sorted(f["runs"])
+        if store:
+            yield from _stored_runs(path, real, store, _text(f.attrs.get("links_to", "")), listed, skipped)
+            return
+        for name in listed:
+            link = f["runs"].get(name, getlink=True)
+            try:
+                if isinstance(link, h5py.ExternalLink):
+                    with h5py.File(_link_target(real, link.filename), "r") as rf:
+                        g = rf[link.path]
+                        if not isinstance(g, h5py.Group):
+                            raise TypeError("not a run group")
+                        yield name, g
+                    continue
+                g = f["runs"][name]
+                if not isinstance(g, h5py.Group):
+                    raise TypeError("not a run group")
+            except (OSError, KeyError, TypeError, ValueError) as e:
+                skipped.append(f"{path}: run {name}: {_one_line(e)}")
+                continue
+            yield name, g
+
+
+def _stored_runs(path, real, store, links_to, listed, skipped):
+    folder = os.path.join(real + ".runs", store)
+    if not os.path.isdir(folder) and links_to and not os.path.isabs(links_to):
+        linked = os.path.join(os.path.dirname(real), links_to)  # renamed without its folder: the one its links name
+        folder = linked if os.path.isdir(linked) else folder
+    if not os.path.isdir(folder):
+        skipped.append(f"{path}: its runs folder {path}.runs/{store} is missing (moved, renamed or not copied with it?)")
+        return
+    seen = set()
+    for fn in sorted(os.listdir(folder)):
+        if fn.startswith(".") or not fn.endswith(".h5"):
+            continue
+        seen.add(urllib.parse.unquote(fn[:-3].split(".")[0]))  # NNNN_<name>[.k<job>].h5, its name %XX-quoted
+        try:
+            with h5py.File(os.path.join(folder, fn), "r") as rf:
+                (name, g), = rf["runs"].items()
+                seen.add(name)
+                yield name, g
+        except (OSError, KeyError, TypeError, ValueError) as e:
+            skipped.append(f"{path}: run file {fn}: {_one_line(e)}")
+    for name in listed:
+        if name not in seen:
+            skipped.append(f"{path}: run {name} is listed by the index but its run file is gone from {folder}")
+
+
 def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "relative_dual_residual", "wall_time"),
          level="simulation"):
-    """A list of runs: dict(name, attrs, data) with the requested datasets that exist. A dataset
-    the schema does not list for the level is a programming error in the plot, not missing data."""
+    """A list of runs, by name: dict(name, attrs, data) with the requested datasets that exist. A
+    dataset the schema does not list for the level is a programming error in the plot, not missing
+    data. A run that cannot be read is named on stderr, one line each, and left out."""
     known = dataset_names(level) if level else {d["name"] for d in schema()["datasets"]}
     unknown = [d for d in datasets if d not in known]
     if unknown:
         raise ValueError(f"xbruns.load: {', '.join(unknown)} not in results/schema.json for {level or 'any'} runs")
-    if not os.path.exists(path):
-        sys.exit(f"{path}: no such file")
-    runs = []
-    try:
-        f = h5py.File(path, "r")
-    except OSError as e:
-        sys.exit(f"{path}: not a readable HDF5 file ({e})")
-    with f:
-        if "runs" not in f:
-            sys.exit(f"{path}: no /runs group (not an xpbd-bench results file?)")
-        for name, g in f["runs"].items():
+    runs, skipped = [], []
+    for name, g in run_groups(path, skipped):
+        try:
             attrs = {k: _text(v) for k, v in g.attrs.items()}
             if level and attrs.get("level", "simulation") != level:
                 continue
@@ -69,29 +148,90 @@ def load(path, datasets=("frame", "substep", "iteration", "dual_residual", "rela
                     if a.dtype.kind in "OS":
                         a = np.array([_text(x) for x in a])
                     data[d] = a
-            runs.append(dict(name=name, attrs=attrs, data=data))
-    return runs
+        except (OSError, KeyError, TypeError, ValueError) as e:
+            skipped.append(f"{path}: run {name}: {_one_line(e)}")
+            continue
+        runs.append(dict(name=name, attrs=attrs, data=data))
+    for s in skipped:
+        print(f"{os.path.basename(sys.argv[0]) or 'plots'}: skipped: {s}", file=sys.stderr)
+    return sorted(runs, key=lambda r: r["name"])
 
 
 # The reference's records (results/README.md, run --reference): what a plot needs to judge it.
-REFERENCE_DATASETS = ("reference/status", "reference/relative_energy_gradient", "reference/relative_dual_residual")
+REFERENCE_DATASETS = ("reference/status", "reference/success", "reference/relative_energy_gradient",
+                      "reference/relative_dual_residual", "reference/error_estimate", "reference/certified",
+                      "reference/certified_threshold", "reference/certificate_note")
+NOT_FINE = "reference not fine enough"
 
 
 def reference_verdict(run, index=0):
     """Whether the run's reference converged in substep `index` of the run (0: its first), the
     one place the plots read that: (True, "") or (False, why), e.g. "stagnated at ‖∇E‖ 0.00025 of
-    its start". Needs REFERENCE_DATASETS loaded; a run without them has no verdict (False)."""
+    its start". It reads the success predicate the harness wrote (reference/success), never the
+    status names. Needs REFERENCE_DATASETS loaded; a run without them has no verdict (False)."""
     d = run.get("data", {}) if run else {}
-    st = d.get("reference/status")
+    st, ok = d.get("reference/status"), d.get("reference/success")
     if st is None or len(st) <= index:
         return False, "no reference recorded"
-    if str(st[index]) in ("converged", "rounding_floor"):  # the floor: as far as rounding allows
+    if ok is None or len(ok) <= index:
+        return False, "no reference/success recorded (a file from before it)"
+    if int(ok[index]):
         return True, ""
     why = str(st[index])
     g = d.get("reference/relative_energy_gradient")
     if g is not None and len(g) > index:
         why += f" at ‖∇E‖ {float(g[index]):.2g} of its start"
     return False, why
+
+
+def reference_trusted(run, threshold, index=0):
+    """Whether the run's reference in substep `index` may judge a position error of `threshold`:
+    (True, "") where it is certified and its error estimate is at most threshold/100 (the harness
+    records that bound as reference/certified_threshold, harness/sim/reference.hpp), else (False,
+    why): why starts with NOT_FINE where the reference is certified but not to that threshold.
+    Every script that prints a position error against a threshold asks this first."""
+    ok, why = reference_verdict(run, index)
+    if not ok:
+        return False, "reference unconverged: " + why if why != "no reference recorded" else why
+    d = run.get("data", {})
+    th, cert = d.get("reference/certified_threshold"), d.get("reference/certified")
+    if th is None or cert is None or len(th) <= index:
+        return False, "reference not certified (a file from before the certificate)"
+    if not int(cert[index]):
+        note = d.get("reference/certificate_note")
+        return False, "reference not certified" + (f": {note[index]}" if note is not None and len(note) > index and
+                                                   str(note[index]) else "")
+    if float(th[index]) <= threshold:
+        return True, ""
+    est = d.get("reference/error_estimate")
+    return False, NOT_FINE + (f" (its error estimate {float(est[index]):.2g} > {threshold:g}/100)" if est is not None else "")
+
+
+def error_text(value, attrs, digits=3):
+    """A run's position error as its references allow it to be printed (the run's attributes, whose
+    reference_certified_threshold is the finest error every substep's reference can judge, 100
+    times its worst error estimate): the value where the references vouch for it, else NOT_FINE
+    (or why there is no reference to judge by). For scripts that print a run's error."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "—"
+    if "reference_substeps_unconverged" not in attrs:
+        return f"{value:.{digits}g} (no reference)"
+    if int(attrs["reference_substeps_unconverged"]):
+        return f"{value:.{digits}g} (reference unconverged)"
+    th = float(attrs.get("reference_certified_threshold", math.inf))
+    if not th <= value:
+        return f"{NOT_FINE} (it judges ≥ {th:.2g})" if math.isfinite(th) else "reference not certified"
+    return f"{value:.{digits}g}"
+
+
+def substep_index(run, frame, substep):
+    """The index into the run's per-substep datasets (reference/..., substep_status) of a frame's
+    substep: substeps are recorded in order, one per iteration-0 entry."""
+    d = run["data"]
+    it, fr, sb = (np.asarray(d[k]) for k in ("iteration", "frame", "substep"))
+    starts = np.flatnonzero(it == 0)
+    hit = np.flatnonzero((fr[starts] == frame) & (sb[starts] == substep))
+    return int(hit[0]) if len(hit) else None
 
 
 METRICS = ("true", "authors")
@@ -131,12 +271,22 @@ def substep_mask(run, frame=None, substep=None):
     return m
 
 
+def own_key(run):
+    """The relative dataset of the measure the run's stop test read (attribute convergence_measure):
+    relative_newton_residual for energy_gradient (‖∇E‖ over its value at x̃: Newton, vbd, avbd),
+    else the relative dual residual it names (the true one for runs from before the attribute)."""
+    m = str(run["attrs"].get("convergence_measure", "dual_residual"))
+    return {"energy_gradient": "relative_newton_residual",
+            "authors_dual_residual": "authors_relative_dual_residual"}.get(m, "relative_dual_residual")
+
+
 def to_tolerance(run, tol, frame=0, substep=0, metric="true", after_first=False):
-    """(outer iterations, seconds) until the relative residual of `metric` is <= tol in one substep;
-    NaNs if never (or if the run has no such dataset). after_first: seconds counted from the end of
-    outer iteration 1, i.e. without the setup and the first iteration (the authors' timing)."""
+    """(outer iterations, seconds) until the relative residual of `metric` (true, authors, or own:
+    the run's own stop measure, own_key) is <= tol in one substep; NaNs if never (or if the run has
+    no such dataset). after_first: seconds counted from the end of outer iteration 1, i.e. without
+    the setup and the first iteration (the authors' timing)."""
     d = run["data"]
-    key = residual_key(metric, relative=True)
+    key = own_key(run) if metric == "own" else residual_key(metric, relative=True)
     if key not in d:
         return math.nan, math.nan
     m = substep_mask(run, frame, substep)

@@ -3,7 +3,7 @@
 
 usage: python3 scripts/form_table.py [--bench build/xpbd-bench] [--dir results/forms] [--tol 1e-8]
                                      [--solvers cholmod,jacobi-pcg,mgpbd,hypre,muelu] [--only LABEL,...]
-                                     [--quick]
+                                     [--quick] [--data FILE.json]
 
 For each system below it runs `xpbd-bench capture` once (cached in DIR; the cholmod-driven state
 of the scene), then `xpbd-bench solve --form dual,primal` with every solver, and prints one
@@ -12,6 +12,9 @@ and form, plus the ratio the primal-form claims are judged by (primal mgpbd's it
 jacobi-pcg's; primal mgpbd's time over the best dual method's). Times are one run on this
 machine (setup + solve as the harness measured them; for the primal form the assembly of K is
 inside setup and the recovery of Δλ inside solve). `--quick` keeps only the smaller systems.
+`--data`: the table as stamped data (plots/pages.py: the machine, its triad and load taken at the
+start), which `python3 plots/pages.py publish FILE.json` makes the results page `forms`
+(docs/results/).
 """
 import argparse
 import os
@@ -21,6 +24,7 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "plots"))
+import pages  # noqa: E402
 import xbruns  # noqa: E402
 
 # label: (scene, sets, frame, iteration). bar_hang 5% prestretched is the hard, nearly
@@ -72,14 +76,17 @@ def main():
     ap.add_argument("--solvers", default="cholmod,jacobi-pcg,mgpbd,hypre,muelu")
     ap.add_argument("--only", default="")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--data", default="", help="write the table as stamped data for plots/pages.py")
     a = ap.parse_args()
     labels = a.only.split(",") if a.only else (QUICK if a.quick else list(SYSTEMS))
     for l in labels:
         if l not in SYSTEMS:
             sys.exit(f"form_table: unknown system '{l}' (valid: {', '.join(SYSTEMS)})")
     os.makedirs(a.dir, exist_ok=True)
-    print("| system | dual rows | method | form | rows | setup s | solve s | total s | iterations | op. complexity | status |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    stamp = pages.stamp("python3 scripts/form_table.py " + " ".join(sys.argv[1:]),
+                        microbench=os.path.join(os.path.dirname(a.bench), "xb_microbench")) if a.data else None
+    t = pages.Table(["system", "dual rows", "method", "form", "rows", "setup s", "solve s", "total s", "iterations",
+                     "op. complexity", "status"])
     verdicts = []
     for label in labels:
         system = capture(a.bench, a.dir, label)
@@ -92,9 +99,9 @@ def main():
             total = float(at.get("setup_time", "nan")) + float(at.get("solve_time", "nan"))
             by[(at["solver"], at["form_used"])] = (at, total)
             rows = at.get("primal_rows", at["rows"]) if at["form_used"] == "primal" else at["rows"]
-            print(f"| {label} | {at['rows']} | {at['solver']} | {at['form_used']} | {int(float(rows))} | "
-                  f"{fmt(at.get('setup_time'), '.3f')} | {fmt(at.get('solve_time'), '.3f')} | {total:.3f} | "
-                  f"{at.get('iterations')} | {fmt(at.get('operator_complexity'), '.2f')} | {at['status']} |")
+            t.row([label, at["rows"], at["solver"], at["form_used"], int(float(rows)), fmt(at.get("setup_time"), ".3f"),
+                   fmt(at.get("solve_time"), ".3f"), f"{total:.3f}", at.get("iterations"),
+                   fmt(at.get("operator_complexity"), ".2f"), at["status"]])
         if ("mgpbd", "primal") in by and ("jacobi-pcg", "dual") in by:
             p, tp = by[("mgpbd", "primal")]
             j, _ = by[("jacobi-pcg", "dual")]
@@ -106,6 +113,14 @@ def main():
     print()
     for v in verdicts:
         print("- " + v)
+    if a.data:
+        text = (f"Each captured system (the cholmod-driven state of its scene; SYSTEMS in the command's script) solved "
+                f"from zero to a dual relative residual of {a.tol} by every method in both forms, one process; the "
+                "primal form's setup includes the assembly of K. Per system: primal mgpbd's iterations over dual "
+                "jacobi-pcg's, and its time over the best dual method's that converged:\n\n"
+                + "\n".join("- " + v for v in verdicts))
+        pages.write_data(a.data, "forms", "Dual against primal form on captured systems",
+                         f"Every global method, both forms, to {a.tol}", stamp, [t.data()], text)
 
 
 if __name__ == "__main__":

@@ -52,9 +52,8 @@ def timed(cmd):
 def size_of(path):
     """The bytes of a results file: its index and every file of its runs folder."""
     total = os.path.getsize(path) if os.path.exists(path) else 0
-    folder = path + ".runs"
-    if os.path.isdir(folder):
-        total += sum(os.path.getsize(os.path.join(folder, f)) for f in os.listdir(folder))
+    for d, _, files in os.walk(path + ".runs"):  # the runs folder and its store
+        total += sum(os.path.getsize(os.path.join(d, f)) for f in files)
     return total
 
 

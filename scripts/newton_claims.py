@@ -2,7 +2,7 @@
 """The card's claims about XPBD's simplifications and Newton's method, measured (docs/newton.md).
 
 usage: python3 scripts/newton_claims.py tournier | chen | macklin | omega | mgpbd_k
-           [--bench build/xpbd-bench] [--out DIR] [--mesh bunny:12k]
+           [--bench build/xpbd-bench] [--out DIR] [--mesh bunny:12k] [--data FILE.json]
 
 tournier  heavy_rope and pendulum (problems/scenes/), variants none, mu1e12, mass_ratio_1e4,
           dt_30hz; XPBD with xpbd.geometric_stiffness none | diagonal | full and Newton, cholmod,
@@ -20,7 +20,12 @@ omega     squash (--mesh): XPBD at omega 1 and 0.25 against Newton, cholmod, --r
 mgpbd_k   squash (--mesh): mgpbd on XPBD's K and on Newton's K (linear.forcing fixed, tol 1e-8):
           levels, operator complexity, PCG iterations per outer iteration.
 
-Each run is its own process; every command is printed, with the 1-min load before it.
+Each run is its own process; every command is printed, with the 1-min load before it. A position
+error is printed only where the run's references are certified to judge it (their error estimate
+at most 1/100 of it, plots/xbruns.py: error_text); elsewhere "reference not fine enough".
+--data: the claim's table as stamped data (plots/pages.py: the machine, its triad and load taken at
+the start), which `python3 plots/pages.py publish FILE.json` makes a section of the results page
+`newton` (docs/results/).
 """
 import argparse
 import os
@@ -31,6 +36,10 @@ import h5py
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+import pages  # noqa: E402
+import xbruns  # noqa: E402
+
 SCENES = os.path.join(ROOT, "problems", "scenes")
 
 
@@ -54,7 +63,8 @@ def run(args, name, scene, solver, sets=(), profile=None, reference=False, state
         r = f["runs"][list(f["runs"])[0]]
         attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in r.attrs.items()}
         data = {k: np.array(r[k]) for k in ("iteration", "relative_newton_residual", "relative_dual_residual",
-                                             "position_error", "linear_iterations", "wall_time", "final_positions")
+                                             "position_error", "linear_iterations", "wall_time", "final_positions",
+                                             "reference/error_estimate")
                 if k in r}
     if state_frame is not None and os.path.exists(state):
         with h5py.File(state) as f:
@@ -82,9 +92,9 @@ def stability(d, newton_end):
 
 
 def tournier(args):
-    print("| scene | variant | outer method | status | outer its | worst position error | worst rel. Newton res. | "
-          "light particles' end speed m/s | distance from Newton's end m |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    t = pages.Table(["scene", "variant", "outer method", "status", "outer its", "worst position error",
+                     "reference's error estimate", "worst rel. Newton res.", "light particles' end speed m/s",
+                     "distance from Newton's end m"])
     for scene in ("heavy_rope", "pendulum"):
         for variant in ("none", "mu1e12", "mass_ratio_1e4", "dt_30hz"):
             newton_end = None
@@ -101,28 +111,28 @@ def tournier(args):
                 if method == "newton":
                     newton_end = d["final_positions"].reshape(-1, 3)
                 label = "Newton" if method == "newton" else f"XPBD, {method}"
-                print(f"| {scene} | {variant} | {label} | {a.get('status')} | {a.get('outer_iterations')} | "
-                      f"{pe:.2e} | {nr:.2e} | {speed:.3g} | {'—' if method == 'newton' else f'{drift:.3g}'} |", flush=True)
+                est = a.get("reference_error_estimate", float("nan"))
+                t.row([scene, variant, label, a.get("status"), a.get("outer_iterations"), xbruns.error_text(pe, a),
+                       f"{est:.2e}", f"{nr:.2e}", f"{speed:.3g}", "—" if method == "newton" else f"{drift:.3g}"])
+    return t
 
 
 def chen(args):
     cases = [("squash", [f"mesh={args.mesh}"]), ("twist_bar", ["stiffness=7e9", "resolution=6"])]
     marks = [1, 5, 10, 20, 40, 60, 100]
-    print("| scene | g | " + " | ".join(f"it {k}" for k in marks) + " | final position error |")
-    print("|---|---|" + "---|" * (len(marks) + 1))
+    t = pages.Table(["scene", "g"] + [f"it {k}" for k in marks] + ["final position error"])
     for scene, sets in cases:
         for keep in ("zero", "keep"):
             a, d = run(args, f"c_{scene}_{keep}", scene, "cholmod",
                        sets + [f"xpbd.primal_residual={keep}", "max_iterations=100", "rtol=0", "atol=0"], reference=True)
             nr, dr = d["relative_newton_residual"], d["relative_dual_residual"]
             cells = [f"{nr[k]:.3g} / {dr[k]:.3g}" if k < len(nr) else "—" for k in marks]
-            print(f"| {scene} | {keep} | " + " | ".join(cells) + f" | {a.get('final_position_error', float('nan')):.3g} |",
-                  flush=True)
+            t.row([scene, keep] + cells + [xbruns.error_text(a.get("final_position_error"), a)])
+    return t
 
 
 def macklin(args):
-    print("| case | dual CG | primal CG | dual Jacobi-PCG | primal Jacobi-PCG |")
-    print("|---|---|---|---|---|")
+    t = pages.Table(["case", "dual CG", "primal CG", "dual Jacobi-PCG", "primal Jacobi-PCG"])
     cases = [(f"mass_ratio {m:g}", [f"mass_ratio={m}"]) for m in (1, 1e2, 1e4, 1e6)]
     cases += [(f"compliance {c:g}", [f"compliance={c}", "mass_ratio=1"]) for c in (1e-4, 1e-7, 1e-10)]
     for label, sets in cases:
@@ -134,7 +144,7 @@ def macklin(args):
                                    "linear.max_iterations=100000", "frames=2"])
                 li = d["linear_iterations"][d["linear_iterations"] > 0]
                 cells.append((f"{li.mean():.1f}" if len(li) else "—") + ("" if a.get("status") == "ok" else f" ({a.get('status')})"))
-        print(f"| mass_chain 256, {label} | " + " | ".join(cells) + " |", flush=True)
+        t.row([f"mass_chain 256, {label}"] + cells)
     for mu in (1e5, 1e7, 1e9, 1e11):  # a 3D case under stiffness: bar_hang, 4 cubes across (1.5K tets)
         cells = []
         for solver in ("cg", "jacobi-pcg"):
@@ -144,28 +154,48 @@ def macklin(args):
                             "linear.max_iterations=100000", "frames=2"])
                 li = d["linear_iterations"][d["linear_iterations"] > 0]
                 cells.append((f"{li.mean():.1f}" if len(li) else "—") + ("" if a.get("status") == "ok" else f" ({a.get('status')})"))
-        print(f"| bar_hang, stiffness {mu:g} | " + " | ".join(cells) + " |", flush=True)
+        t.row([f"bar_hang, stiffness {mu:g}"] + cells)
+    return t
 
 
 def omega(args):
-    print("| outer method | status | outer its | wall time s | final position error | final rel. Newton res. |")
-    print("|---|---|---|---|---|---|")
+    t = pages.Table(["outer method", "status", "outer its", "wall time s", "final position error",
+                     "final rel. Newton res."])
     for label, sets, profile in (("XPBD, omega = 1", ["omega=1"], None), ("XPBD, omega = 0.25", [], None),
                                  ("Newton", [], "newton")):
         a, d = run(args, f"o_{label.split(',')[-1].strip().replace(' ', '')}", "squash", "cholmod",
                    [f"mesh={args.mesh}"] + sets, profile=profile, reference=True)
-        print(f"| {label} | {a.get('status')} | {a.get('outer_iterations')} | {a.get('wall_time'):.3g} | "
-              f"{a.get('final_position_error'):.3g} | {a.get('final_relative_newton_residual'):.3g} |", flush=True)
+        t.row([label, a.get("status"), a.get("outer_iterations"), f"{a.get('wall_time'):.3g}",
+               xbruns.error_text(a.get("final_position_error"), a), f"{a.get('final_relative_newton_residual'):.3g}"])
+    return t
 
 
 def mgpbd_k(args):
-    print("| K | levels | operator complexity | PCG iterations per outer iteration |")
-    print("|---|---|---|---|")
+    t = pages.Table(["K", "levels", "operator complexity", "PCG iterations per outer iteration"])
     for label, profile in (("XPBD's (M + Jᵀα̃⁻¹J)", None), ("Newton's (M + Σπ(H_j))", "newton")):
         a, d = run(args, f"k_{'newton' if profile else 'xpbd'}", "squash", "mgpbd",
                    [f"mesh={args.mesh}", "linear.forcing=fixed", "linear.tol=1e-8", "max_iterations=8"], profile=profile)
         its = " ".join(str(int(v)) for v in d["linear_iterations"][1:])
-        print(f"| {label} | {a.get('levels')} | {a.get('operator_complexity', float('nan')):.3g} | {its} |", flush=True)
+        t.row([label, a.get("levels"), f"{a.get('operator_complexity', float('nan')):.3g}", its])
+    return t
+
+
+def claim_text(claim):
+    """The claim's paragraph of this file's usage text."""
+    lines, out = __doc__.split("\n"), []
+    for line in lines:
+        if out and line[:1] not in (" ", ""):
+            break
+        if out or line.startswith(claim + " "):
+            out.append(line[len(claim):].strip() if not out else line.strip())
+    return " ".join(x for x in out if x)
+
+
+TITLES = {"tournier": "Tournier: geometric stiffness on stiff and high-mass-ratio cases",
+          "chen": "Chen: the Newton residual with g zeroed and kept",
+          "macklin": "Macklin: dual against primal form",
+          "omega": "The squash's ω under XPBD and Newton",
+          "mgpbd_k": "mgpbd on XPBD's K and on Newton's K"}
 
 
 def main():
@@ -174,9 +204,15 @@ def main():
     ap.add_argument("--bench", default=os.path.join(ROOT, "build", "xpbd-bench"))
     ap.add_argument("--out", default="/tmp/xb_newton_claims")
     ap.add_argument("--mesh", default="bunny:12k")
+    ap.add_argument("--data", default="", help="write the table as stamped data for plots/pages.py")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    globals()[args.claim](args)
+    stamp = pages.stamp("python3 scripts/newton_claims.py " + " ".join(sys.argv[1:]),
+                        microbench=os.path.join(os.path.dirname(args.bench), "xb_microbench")) if args.data else None
+    t = globals()[args.claim](args)
+    if args.data:
+        pages.write_data(args.data, "newton", "Newton on E: the tables", TITLES[args.claim], stamp, [t.data()],
+                         claim_text(args.claim), order=2 + list(TITLES).index(args.claim))
 
 
 if __name__ == "__main__":

@@ -123,6 +123,9 @@ struct MethodInfo {
   std::string reason;      // why it is unavailable
   std::string description;
   bool distributed = false;  // hypre, muelu: runs on every MPI rank (solvers/mpi/)
+  // vbd, avbd (local too): block descent on the incremental potential, its own outer loop
+  // (harness/sim/block_descent.hpp), not an XPBD sweep.
+  bool block_descent = false;
 };
 const std::vector<MethodInfo>& methods();  // the built-in ones
 // A built-in or registered method, or null.

@@ -30,6 +30,8 @@ const std::vector<Entry>& entries() {
       {{"xpbd-jacobi", true, true, "", "one Jacobi sweep of Eq. 10 per outer iteration (relaxed by xpbd.jacobi_relaxation)"}, nullptr},
       {{"xpbd-gs", true, true, "", "one Gauss-Seidel sweep of Eq. 10 per outer iteration (graph-coloured, parallel)"}, nullptr},
       {{"xpbd-authors", true, true, "", "the authors' XPBD baseline: Jacobi sweep, full dlambda, x relaxed by xpbd.position_relaxation, C <= 1e-6 skipped"}, nullptr},
+      {{"vbd", true, true, "", "Vertex Block Descent (Chen et al. 2024): per-vertex Newton on E, colour by colour; stops on |grad E|", false, true}, nullptr},
+      {{"avbd", true, true, "", "Augmented VBD (Giles et al. 2025): VBD with ramped stiffness and multipliers (rigid constraints, contact)", false, true}, nullptr},
       {{"cholmod", false, true, "", "Goldenthal's direct solve: CHOLMOD supernodal Cholesky of the global system"}, make_cholmod},
       {{"cg", false, true, "", "conjugate gradients on the global system"}, make_cg},
       {{"jacobi-pcg", false, true, "", "Jacobi-preconditioned conjugate gradients on the global system"}, make_jacobi_pcg},

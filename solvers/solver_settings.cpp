@@ -23,6 +23,7 @@ SettingTable<SolverSettings> make_table() {
   append_part(t, hypre_settings(), [](S& s) -> HypreSettings& { return s.hypre; });
   append_part(t, muelu_settings(), [](S& s) -> MueluSettings& { return s.muelu; });
   append_part(t, xpbd_settings(), [](S& s) -> XpbdSettings& { return s.xpbd; });
+  append_part(t, block_descent_settings(), [](S& s) -> BlockDescentSettings& { return s.block_descent; });
   return t;
 }
 }  // namespace

@@ -1,10 +1,11 @@
 // The settings every solver is built from: the linear solve's (linear.*), the random seed of
-// randomized setups, and each solver family's own table (amg.*, hypre.*, muelu.*, xpbd.*).
+// randomized setups, and each solver family's own table (amg.*, hypre.*, muelu.*, xpbd.*, vbd.*, avbd.*).
 // Solvers take this struct, never the harness's Params; the MPI workers receive it as text.
 #pragma once
 
 #include "amg/amg_settings.hpp"
 #include "direct/cholmod_settings.hpp"
+#include "local/vbd_settings.hpp"
 #include "local/xpbd_settings.hpp"
 #include "mpi/hypre_settings.hpp"
 #include "mpi/muelu_settings.hpp"
@@ -35,6 +36,7 @@ struct SolverSettings {
   HypreSettings hypre;
   MueluSettings muelu;
   XpbdSettings xpbd;
+  BlockDescentSettings block_descent;  // vbd.*, avbd.*
 };
 
 const SettingTable<SolverSettings>& solver_settings();

@@ -69,12 +69,25 @@ void add_frame_writers(RunOptions& opt, const Args& args, const Problem& prob, c
       if (s.frame == state_frame + 1) write_state(save_state, s, q);
     });
 }
+
+// --time-budget, --memory-limit (caps the process's data segment now), --reference and
+// --reference-file (which implies --reference: per-substep reference and position_error).
+RunOptions run_options(const Args& args) {
+  RunOptions opt;
+  opt.time_budget = time_budget_flag(args, "run");
+  opt.memory_limit = memory_limit_flag(args, "run");
+  opt.reference = args.has("--reference") || args.has("--reference-file");
+  opt.reference_file = args.get("--reference-file", "");
+  if (args.has("--reference-file") && opt.reference_file.empty()) throw Error("run: --reference-file needs a path");
+  return opt;
+}
 }  // namespace
 
 int cmd_run(const CommandArgs& argv) {
   Args args("run", argv,
             {{"--scene"}, {"--solver"}, {"--frames"}, {"--set", true, true}, {"--out"}, {"--time-budget"}, {"--write-meshes"}, {"--variant"}, {"--reference", false}, {"--form"}, {"--profile"}, {"--quiet", false},
-             {"--save-state"}, {"--frame-of-state"}, {"--load-state"}, {"--append", false}});
+             {"--save-state"}, {"--frame-of-state"}, {"--load-state"}, {"--append", false}, {"--reference-file"},
+             {"--memory-limit"}});
   // Everything is checked before anything is written.
   const std::string scene = args.require("--scene");
   const std::string out = args.require("--out");
@@ -101,6 +114,7 @@ int cmd_run(const CommandArgs& argv) {
   inputs.push_back(resolve_scene(scene));
   if (args.has("--profile")) inputs.push_back(resolve_profile(args.get("--profile")));
   if (args.has("--load-state")) inputs.push_back(args.get("--load-state"));
+  if (args.has("--reference-file")) inputs.push_back(args.get("--reference-file"));  // read, and written beside out
   check_output("run", "--out", out, inputs);
   ResultsWriter writer = command_writer("run", out, args.has("--append"));  // replaces out unless --append
   if (!save_state.empty()) {
@@ -110,9 +124,7 @@ int cmd_run(const CommandArgs& argv) {
   if (args.has("--write-meshes")) check_output_dir("run", "--write-meshes", args.get("--write-meshes"), inputs);
   std::optional<SimState> loaded;
   if (args.has("--load-state")) loaded = read_state(args.get("--load-state"));
-  RunOptions opt;
-  opt.time_budget = time_budget_flag(args, "run");
-  opt.reference = args.has("--reference");  // per-substep reference and position_error
+  RunOptions opt = run_options(args);
   const Problem prob = build_problem(p);
   if (loaded && loaded->x.cols() != prob.particles.size())
     throw Error("run: --load-state " + args.get("--load-state") + " has " + std::to_string(loaded->x.cols()) +
@@ -121,6 +133,7 @@ int cmd_run(const CommandArgs& argv) {
 
   const bool show = progress_wanted(args);
   int index = 0;
+  std::vector<RunRecord> added;  // reported at the end (the file may hold many more)
   for (const auto& [method, form, tag] : runs) {
     Params q = p;
     if (!form.empty()) q.form = form;
@@ -137,9 +150,11 @@ int cmd_run(const CommandArgs& argv) {
     std::cerr << " " << res.status << " (" << res.outer_iterations << " outer iterations, " << res.wall_time << " s)\n";
     if (failed) throw command_write_error("run", *failed, out, writer.runs_in_file());
     ++index;
-    append_command_run("run", writer, make_simulation_record(p.scene + "_" + tag, q, method, res), writer.runs_in_file());
+    added.push_back(make_simulation_record(p.scene + "_" + tag, q, method, res));
+    added.back().name = append_command_run("run", writer, added.back(), writer.runs_in_file());
   }
-  print_report(out, "table");
+  close_command_writer("run", writer);
+  print_runs(added, "table");
   return 0;
 }
 
@@ -150,6 +165,15 @@ int cmd_report(const CommandArgs& argv) {
   if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
   // Unreadable runs are named on stderr and skipped; the exit code says some were.
   return print_report(args.positional()[0], format) > 0 ? 1 : 0;
+}
+
+int cmd_repair(const CommandArgs& argv) {
+  Args args("repair", argv, {}, 1);
+  if (args.positional().empty()) throw Error("repair: which results file? (repair FILE.h5)");
+  const std::string path = args.positional()[0];
+  const RepairReport rep = repair_results(path);
+  print_repair(path, rep);
+  return 0;
 }
 
 int cmd_pack(const CommandArgs& argv) {

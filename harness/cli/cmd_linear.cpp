@@ -310,6 +310,7 @@ int cmd_solve(const CommandArgs& argv) {
     line.erase();
   }
 
+  std::vector<RunRecord> added;  // reported at the end (the file may hold many more)
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto& [q, form] = setups[i];
     RunRecord r;
@@ -337,9 +338,11 @@ int cmd_solve(const CommandArgs& argv) {
       outcome = solve_one(sys, runs[i].method, q, form);
     }
     record_outcome(r, std::move(outcome), ref, sys.A, sys.b);
-    append_command_run("solve", writer, r, writer.runs_in_file());
+    r.name = append_command_run("solve", writer, r, writer.runs_in_file());
+    added.push_back(std::move(r));
   }
-  print_report(out, "table");
+  close_command_writer("solve", writer);
+  print_runs(added, "table");
   return 0;
 }
 

@@ -224,12 +224,17 @@ void run_jobs(const Sweep& s, const std::function<int()>& next, int total, int d
     os << (alone ? "" : head) << " " << res.status << " (" << res.outer_iterations << " outer iterations, rel. dual residual "
        << std::setprecision(3) << res.relative_dual_residual << ", " << std::setprecision(3) << res.wall_time << " s)\n";
     std::cerr << os.str() << std::flush;  // before the write, so that a failed one is a line of its own
-    append_command_run("sweep", writer, rec, std::max(kept, writer.runs_in_file()),
-                       ": run the same sweep again to resume from there");
+    const int held = writer.jobs_held_already();
+    const std::string name = append_command_run("sweep", writer, rec, std::max(kept, writer.runs_in_file()),
+                                                ": run the same sweep again to resume from there");
+    if (writer.jobs_held_already() > held)  // another sweep finished this job first: one run per job
+      std::cerr << "sweep" << tag << ": " << describe(job, s.spec.repeats) << ": " << s.out << " holds this job already (run "
+                << name << ", by another writer meanwhile): this run is not kept\n";
     ++done;
     spent += clock.seconds();
     ++timed;
   }
+  close_command_writer("sweep", writer);
 }
 
 // argv without --jobs N: what each of --jobs' processes runs.

@@ -14,4 +14,5 @@ int cmd_sweep(const CommandArgs& args);
 int cmd_capture(const CommandArgs& args);
 int cmd_solve(const CommandArgs& args);
 int cmd_pack(const CommandArgs& args);
+int cmd_repair(const CommandArgs& args);
 }  // namespace xb

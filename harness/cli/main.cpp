@@ -23,13 +23,14 @@ const Command commands[] = {
     {"list", xb::cmd_list, "list                                  scenes, solvers and parameter keys, one per line"},
     {"schema", xb::cmd_schema, "schema                                the results schema as JSON (results/schema.json)"},
     {"run", xb::cmd_run,
-     "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--reference] [--save-state FILE --frame-of-state F] [--load-state FILE] --out FILE.h5 [--append]"},
+     "run --scene NAME|FILE --solver A,B,... [--frames N] [--profile NAME|FILE] [--set key=value]... [--time-budget S] [--memory-limit GB] [--reference] [--reference-file FILE] [--save-state FILE --frame-of-state F] [--load-state FILE] --out FILE.h5 [--append]"},
     {"report", xb::cmd_report, "report FILE.h5 [--format table|json]"},
     {"sweep", xb::cmd_sweep, "sweep SPEC.toml --out FILE.h5 [--size NAME] [--profile NAME|FILE] [--time-budget S] [--jobs N | --part K/N]   (resumes: skips runs already in FILE; under mpirun the ranks share the jobs)"},
     {"capture", xb::cmd_capture,
      "capture --scene NAME|FILE [--set key=value]... --frame F [--substep S] --iteration I [--solver X] [--time-budget S] --out PREFIX"},
     {"solve", xb::cmd_solve, "solve --system PREFIX.h5 --solver A,B,... [--tol T] [--set key=value]... --out FILE.h5 [--append]"},
     {"pack", xb::cmd_pack, "pack FILE.h5 --out ONE.h5                 every run of FILE in one self-contained file (to hand to someone)"},
+    {"repair", xb::cmd_repair, "repair FILE.h5                            rebuild FILE's index from its run files; say what was found"},
 };
 
 // A command's exit code; an error is one line (with the rank under mpirun) and exit code 2 (3 for a bug).

@@ -114,6 +114,17 @@ ResultsWriter command_writer(const std::string& command, const std::string& out,
   return ResultsWriter(out, !append);
 }
 
+void close_command_writer(const std::string& command, ResultsWriter& out) {
+  try {
+    out.close();
+  } catch (const WriteError& e) {
+    throw WriteError(e.path, e.err,
+                     command + ": " + e.what() + "; its " + std::to_string(out.runs_in_file()) +
+                         " runs are kept (report and xpbd_bench.read read them): its index, what h5py reads, is brought "
+                         "up to date by the next writer or `xpbd-bench repair`");
+  }
+}
+
 WriteError command_write_error(const std::string& command, const WriteError& e, const std::string& holder, int kept,
                                const std::string& hint) {
   std::string line = command + ": " + e.what();

@@ -39,6 +39,9 @@ std::string append_command_run(const std::string& command, ResultsWriter& out, c
 // `run` and `solve` --out [--append]: refuses an --out that cannot take runs (with --append: one
 // that exists and is not a results file; without: check_replaceable) and returns its writer.
 ResultsWriter command_writer(const std::string& command, const std::string& out, bool append);
+// The writer's close() at the end of a command: a failed write of the index is one line that
+// starts with the command and says the runs are kept.
+void close_command_writer(const std::string& command, ResultsWriter& out);
 // That line for any failed write of a command: "<command>: <e>; <holder> holds the <kept> runs
 // finished before<hint>".
 WriteError command_write_error(const std::string& command, const WriteError& e, const std::string& holder, int kept,

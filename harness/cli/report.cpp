@@ -95,6 +95,24 @@ bool has_timing_provenance(const RunRecord& r) {
 }
 }  // namespace
 
+void print_repair(const std::string& path, const RepairReport& rep) {
+  if (rep.packed) {
+    std::cout << "repair: " << path << " holds its " << rep.runs << " runs inline (a packed file): nothing to repair\n";
+    return;
+  }
+  std::cout << "repair: " << path << ": " << rep.runs << " runs; index rebuilt from its run files\n";
+  const auto list = [](const char* what, const std::vector<std::string>& items) {
+    if (items.empty()) return;
+    std::cout << "repair: " << what << " (" << items.size() << "):\n";
+    for (size_t i = 0; i < items.size() && i < 20; ++i) std::cout << "  " << items[i] << "\n";
+    if (items.size() > 20) std::cout << "  ... and " << items.size() - 20 << " more\n";
+  };
+  list("runs now in the index that it did not list", rep.found.relinked);
+  list("runs it listed that are gone or unreadable, left out", rep.found.dangling);
+  list("removed", rep.found.removed);
+  for (const auto& n : rep.found.notes) std::cout << "repair: " << n << "\n";
+}
+
 void warn_skipped(const std::string& command, const std::vector<std::string>& skipped) {
   for (const auto& s : skipped) std::cerr << command << ": skipped unreadable run: " << s << "\n";
 }
@@ -152,8 +170,18 @@ std::string reference_cell(const RunRecord& r) {
   return n == "0" ? "converged" : n + " of " + attr_cell(r, "substeps_total") + " substeps unconverged";
 }
 
+// The reference's certificate (harness/sim/certificate.hpp): the finest position-error threshold
+// every substep's reference supports (100 times its error estimate), or how many are uncertified.
+std::string certificate_cell(const RunRecord& r) {
+  if (!r.attrs.count("reference_substeps_uncertified")) return "-";
+  const std::string n = attr_cell(r, "reference_substeps_uncertified");
+  if (n != "0") return "uncertified in " + n + " of " + attr_cell(r, "substeps_total") + " substeps";
+  return "error <= " + attr_cell(r, "reference_error_estimate") + ", trusted to " +
+         attr_cell(r, "reference_certified_threshold");
+}
+
 // The simulation table's columns: each run's own convergence measure, and with a reference the
-// position error and whether the reference converged.
+// position error, whether the reference converged and its certificate.
 std::vector<Column> simulation_columns(const std::vector<RunRecord>& runs) {
   std::vector<Column> cols;
   for (const char* k : {"scene", "solver", "form_used", "status", "outer_iterations"}) cols.push_back(attr_column(k));
@@ -161,7 +189,9 @@ std::vector<Column> simulation_columns(const std::vector<RunRecord>& runs) {
   const bool reference = std::any_of(runs.begin(), runs.end(), [](const RunRecord& r) {
     return attr_cell(r, "level") == "simulation" && r.attrs.count("reference_substeps_unconverged");
   });
-  if (reference) cols.insert(cols.end(), {attr_column("final_position_error"), {"reference", reference_cell}});
+  if (reference)
+    cols.insert(cols.end(),
+                {attr_column("final_position_error"), {"reference", reference_cell}, {"certificate", certificate_cell}});
   cols.push_back(attr_column("wall_time"));
   return cols;
 }
@@ -209,18 +239,23 @@ void print_tables(const std::vector<RunRecord>& runs) {
                 << ", or OpenMP threads spinning (wait policy not passive); rerun on a quiet machine\n";
     if (level == "simulation")
       std::cout << "measure: what each run's stop test read (|grad E| under step = newton, in N; else the dual "
-                   "residual); relative: over the same substep's first value\n";
+                   "residual); relative: over the same substep's first value; certificate: the worst bound on the "
+                   "reference's own position error and the finest position error it can judge (100 times that)\n";
     std::cout << "\n";
   }
 }
 }  // namespace
 
+void print_runs(const std::vector<RunRecord>& runs, const std::string& format) {
+  if (format == "json") print_json(runs);
+  else print_tables(runs);
+}
+
 int print_report(const std::string& path, const std::string& format) {
   if (format != "table" && format != "json") throw Error("report: unknown format '" + format + "' (valid: table, json)");
   std::vector<std::string> skipped;
   const auto runs = read_runs(path, false, &skipped);
-  if (format == "json") print_json(runs);
-  else print_tables(runs);
+  print_runs(runs, format);
   warn_skipped("report", skipped);
   return static_cast<int>(skipped.size());
 }

@@ -4,6 +4,7 @@
 #include "profile.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/process_memory.hpp"
 #include "../../problems/primal_system.hpp"
 #include "../../problems/scene.hpp"
 #include "../../solvers/mpi/distributed.hpp"
@@ -26,6 +27,14 @@ double time_budget_flag(const Args& args, const std::string& command) {
   const double s = args.get_double("--time-budget", default_time_budget);
   if (s < 0) throw Error(command + ": --time-budget must be >= 0 (s; 0 = no limit)");
   return s;
+}
+
+double memory_limit_flag(const Args& args, const std::string& command) {
+  const double gb = args.get_double("--memory-limit", 0);
+  if (!(gb >= 0) || gb > 1e6) throw Error(command + ": --memory-limit must be in [0, 1e6] (GB; 0 = no limit)");
+  if (gb == 0) return 0;
+  set_data_limit(static_cast<long long>(gb * 1e9 * 1.05 + 256e6));
+  return gb * 1e9;
 }
 
 void apply_set(Params& p, const std::string& kv) {

@@ -12,12 +12,17 @@ namespace xb {
 class Args;
 
 // The longest one run may take, in s, unless --time-budget says otherwise (0 = no limit): generous,
-// but a run asked for 1e9 iterations or frames ends with status `timeout` instead of never.
+// but a run asked for 1e9 iterations or frames ends with status `over_budget` instead of never.
 constexpr double default_time_budget = 3600;
 // The parameter `frames` is at most this (problems/scene_settings.cpp), so frame numbers are below it.
 constexpr int max_frames = 1000000000;
 // --time-budget S of `command` (>= 0), or default_time_budget.
 double time_budget_flag(const Args& args, const std::string& command);
+// --memory-limit GB (10^9 bytes; 0 or absent = none) in bytes: the resident set a run may reach
+// (status out_of_memory past it). Caps the process's data segment a little above it (RLIMIT_DATA:
+// the limit, 5% and 256 MB more), so that one allocation past it fails inside the run instead of
+// the system killing the process. Throws xb::Error for a bad value.
+double memory_limit_flag(const Args& args, const std::string& command);
 
 // defaults ← the scene spec ← the profile (cli/profile.hpp; "" = none) ← --set key=value
 // overrides (in order), then validate().

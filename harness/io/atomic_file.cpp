@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -24,6 +25,7 @@ namespace xb {
 
 namespace {
 void fsync_folder(const std::string& path) {
+  io_fault::durable_step();
   const fs::path parent = fs::path(path).parent_path();
   const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY);
   if (fd >= 0) {
@@ -31,6 +33,9 @@ void fsync_folder(const std::string& path) {
     ::close(fd);
   }
 }
+
+// A file system that has no hard links (some FUSE and SMB mounts): link(2) fails with one of these.
+bool no_hard_links(int err) { return err == EPERM || err == ENOTSUP || err == EOPNOTSUPP || err == ENOSYS || err == EMLINK; }
 }  // namespace
 
 std::string errno_text(int err) {
@@ -167,6 +172,7 @@ void TmpFile::finish() {
   if (!pending_.empty()) put(pending_.data(), pending_.size());
   pending_.clear();
   if (const int e = io_fault::next_write()) fail("flush " + shown_ + " to disk", e);
+  io_fault::durable_step();
   if (::fsync(fd_) != 0) {
     const int e = errno;
     fail("flush " + shown_ + " to disk", e);
@@ -180,10 +186,33 @@ void TmpFile::finish() {
 void TmpFile::commit() {
   finish();
   int e = io_fault::next_rename();
+  io_fault::durable_step();
   if (e == 0 && ::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
   if (e) fail("write " + shown_ + " (rename into place)", e);
   committed_ = true;
   fsync_folder(path_);
+}
+
+bool TmpFile::commit_new() {
+  finish();
+  int e = io_fault::next_rename();
+  io_fault::durable_step();
+  if (e == 0 && ::link(tmp_.c_str(), path_.c_str()) != 0) e = errno;
+  if (e == EEXIST) {  // over NFS a retried link that had succeeded says EEXIST: PATH is then this file
+    struct stat a {}, b {};
+    if (::stat(tmp_.c_str(), &a) != 0 || ::stat(path_.c_str(), &b) != 0 || a.st_ino != b.st_ino || a.st_dev != b.st_dev) return false;
+    e = 0;
+  }
+  if (no_hard_links(e)) {  // the caller holds the file's lock: a rename cannot meet another writer's file
+    e = 0;
+    if (::rename(tmp_.c_str(), path_.c_str()) != 0) e = errno;
+    else committed_ = true;
+  }
+  if (e) fail("write " + shown_ + " (link into place)", e);
+  if (!committed_) ::unlink(tmp_.c_str());  // the file is PATH now; a kill before this leaves a stale temporary
+  committed_ = true;
+  fsync_folder(path_);
+  return true;
 }
 
 void make_parent(const std::string& path) {

@@ -59,6 +59,11 @@ class TmpFile {
   // finish(), then renames the temporary file over PATH and flushes the folder. Throws WriteError
   // (the temporary file is then removed, PATH left as it was).
   void commit();
+  // finish(), then gives the file the name PATH only if no file has it (link(2): never replaces
+  // one, even when two writers race for a name; a rename where the file system has no hard links)
+  // and flushes the folder. Returns false, keeping the temporary file, when PATH exists. Throws
+  // WriteError as commit().
+  bool commit_new();
 
  private:
   void put(const char* data, std::size_t n);  // one write call (a chunk), retried while partial

@@ -1,7 +1,9 @@
-// Advisory locks between the writers (and readers) of one results file, on a lock file beside it
-// (recorder.hpp). Linux open-file-description locks (fcntl F_OFD_SETLK): held by one open of the
-// file, so two threads of a process exclude each other as two processes do; released when the
-// holder closes it or dies (SIGKILL included: no stale lock to clean); honoured over NFS too.
+// Advisory locks between the writers of one results file, on a lock file in its runs folder
+// (recorder.hpp; readers take none). Linux open-file-description locks (fcntl F_OFD_SETLK): held
+// by one open of the file, so two threads of a process exclude each other as two processes do;
+// released when the holder closes it or dies (SIGKILL included: no stale lock to clean); honoured
+// over NFS with lockd. A file system that refuses locks (ENOLCK: NFS without lockd, some
+// containers) is an error naming it: nothing is written unlocked.
 #pragma once
 
 #include <string>
@@ -16,7 +18,8 @@ class FileLock {
   // ("waiting for <shown>: another writer holds it ..."). exclusive: the lock file (and its
   // folder) is made when missing, and a failure is a WriteError naming `shown`, the file the user
   // asked for. shared: without a lock file that can be opened (a packed file, a read-only copy)
-  // nothing is held (nothing writes there either).
+  // nothing is held (nothing writes there either). A lock the file system refuses is a WriteError
+  // naming `shown`, the file system and its mount point.
   FileLock(const std::string& lock_path, Kind kind, const std::string& shown);
   ~FileLock();
   FileLock(FileLock&& o) noexcept;
@@ -35,7 +38,8 @@ class FileLock {
 // file nobody holds (a killed sweep's) is known stale: remove_unused_counter.
 class SharedCounter {
  public:
-  // Opens (creating it, and its folder, when missing) the counter file. Throws xb::Error.
+  // Opens (creating it, and its folder, when missing) the counter file. Throws xb::Error (a
+  // WriteError where the file system refuses locks).
   explicit SharedCounter(const std::string& path);
   ~SharedCounter();
   SharedCounter(const SharedCounter&) = delete;

@@ -303,6 +303,13 @@ H create_memory_file() {
   return f;
 }
 
+H open_memory_image(const std::vector<char>& image) {
+  silence_errors();
+  H fapl = memory_access();
+  check(H5Pset_file_image(fapl, const_cast<char*>(image.data()), image.size()), "file image");
+  return H(H5Fopen(memory_name().c_str(), H5F_ACC_RDWR, fapl), H5Fclose);
+}
+
 std::vector<char> file_image(hid_t file) {
   check(H5Fflush(file, H5F_SCOPE_GLOBAL), "flush (in memory)");
   const ssize_t n = H5Fget_file_image(file, nullptr, 0);

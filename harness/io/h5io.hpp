@@ -52,6 +52,9 @@ H open_file(const std::string& path);
 // memory, twice while its image is taken; results and captured systems are MBs, not GBs.
 // Each file closes strongly: closing it closes every object still open in it.
 H create_memory_file();
+// A file in memory, writable, holding a copy of `image` (a file's bytes); an invalid id (< 0) when
+// they are not an HDF5 file.
+H open_memory_image(const std::vector<char>& image);
 // The bytes of a file built in memory, flushed first.
 std::vector<char> file_image(hid_t file);
 // Turns off HDF5's printing of error stacks (we report our own messages); idempotent.

@@ -1,17 +1,14 @@
 #include "results_index.hpp"
 
 #include "atomic_file.hpp"
-#include "file_lock.hpp"
 #include "h5io.hpp"
 
 #include "../../core/error.hpp"
 
 #include <algorithm>
-#include <cctype>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <map>
+#include <fstream>
+#include <iterator>
 
 namespace fs = std::filesystem;
 
@@ -21,243 +18,187 @@ using namespace h5;
 
 namespace {
 
-// "r.h5.runs/": how the index's links name the run files (relative to its folder).
-std::string link_prefix(const std::string& path) { return fs::path(path).filename().string() + ".runs/"; }
+// Root attributes the index keeps up to date itself; the others are carried as they are.
+bool own_attr(const std::string& key) { return key == "store" || key == "links_to" || key == "runs_indexed"; }
 
-// Whether `name` (in FILE.runs/) is a run file: <anything>.<8 hex>.h5.
-bool is_run_file(const std::string& name) {
-  const size_t n = name.size();
-  if (n < 13 || !name.ends_with(".h5") || name[n - 12] != '.') return false;
-  for (size_t i = n - 11; i < n - 3; ++i)
-    if (!std::isxdigit(static_cast<unsigned char>(name[i]))) return false;
-  return true;
+std::string text_attr(const std::map<std::string, AttrValue>& attrs, const std::string& key) {
+  auto it = attrs.find(key);
+  const auto* s = it == attrs.end() ? nullptr : std::get_if<std::string>(&it->second);
+  return s ? *s : "";
 }
 
-void write_file_attrs(hid_t file) {
-  write_attr(file, "schema_version", static_cast<long long>(schema_version));
-  write_attr(file, "generator", std::string("xpbd-bench"));
-}
-
-// An index in memory with these root attributes and an empty /runs.
-Index index_with(const std::map<std::string, AttrValue>& attrs) {
-  Index index;
-  index.file = create_memory_file();
-  for (const auto& [k, v] : attrs) write_attr(index.file, k, v);
-  index.runs = H(H5Gcreate2(index.file, "runs", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
-  check_id(index.runs, "create group /runs");
-  if (auto it = attrs.find("writer"); it != attrs.end())
-    if (auto* s = std::get_if<std::string>(&it->second)) index.writer = *s;
-  return index;
-}
-
-// The value of a soft or external link: (target file or "", target object).
-std::pair<std::string, std::string> link_value(hid_t loc, const std::string& name, const H5L_info_t& info,
-                                               const std::string& where) {
-  std::vector<char> buf(info.u.val_size + 1, '\0');
-  if (H5Lget_val(loc, name.c_str(), buf.data(), buf.size(), H5P_DEFAULT) < 0) throw Error(where + ": cannot read link " + name);
-  if (info.type == H5L_TYPE_SOFT) return {"", buf.data()};
-  const char *file = nullptr, *object = nullptr;
-  unsigned flags = 0;
-  if (H5Lunpack_elink_val(buf.data(), info.u.val_size, &flags, &file, &object) < 0 || !file || !object)
-    throw Error(where + ": cannot read external link " + name);
-  return {file, object};
-}
-
-// Copies the link `name` of `from` into `to` as it is (a hard link: the object, copied).
-// Returns the external link's target file ("" for other links).
-std::string copy_link(hid_t from, hid_t to, const std::string& name, const std::string& where) {
-  H5L_info_t info;
-  if (H5Lget_info(from, name.c_str(), &info, H5P_DEFAULT) < 0) throw Error(where + ": cannot read link " + name);
-  if (info.type == H5L_TYPE_HARD) {
-    check(H5Ocopy(from, name.c_str(), to, name.c_str(), H5P_DEFAULT, H5P_DEFAULT), "copy " + name);
-    return "";
+// An attribute set in place when it exists with the same type (no space left behind in the file
+// by a delete and a create: the index is updated over and over), else made anew.
+void set_attr(hid_t file, const char* key, const AttrValue& v) {
+  if (H5Aexists(file, key) > 0) {
+    H a(H5Aopen(file, key, H5P_DEFAULT), H5Aclose);
+    H t(a < 0 ? H5I_INVALID_HID : H5Aget_type(a), H5Tclose);
+    if (const auto* n = std::get_if<long long>(&v); n && t >= 0 && H5Tget_class(t) == H5T_INTEGER && H5Tget_size(t) == sizeof(long long)) {
+      check(H5Awrite(a, H5T_NATIVE_LLONG, n), std::string("write attribute ") + key);
+      return;
+    }
+    if (const auto* s = std::get_if<std::string>(&v); s && a >= 0 && read_attr(a, key) == v) return;
+    a.reset();
+    check(H5Adelete(file, key), std::string("replace attribute ") + key);
   }
-  if (info.type != H5L_TYPE_SOFT && info.type != H5L_TYPE_EXTERNAL) throw Error(where + ": link " + name + " of an unknown kind");
-  const auto [file, object] = link_value(from, name, info, where);
-  if (info.type == H5L_TYPE_SOFT) {
-    check(H5Lcreate_soft(object.c_str(), to, name.c_str(), H5P_DEFAULT, H5P_DEFAULT), "link " + name);
-    return "";
-  }
-  check(H5Lcreate_external(file.c_str(), object.c_str(), to, name.c_str(), H5P_DEFAULT, H5P_DEFAULT), "link " + name);
-  return file;
+  write_attr(file, key, v);
 }
 
-// Whether `name` under `loc` is a group stored in this file (not through a link to another).
-bool inline_group(hid_t loc, const std::string& name) {
-  H5L_info_t info;
-  if (H5Lget_info(loc, name.c_str(), &info, H5P_DEFAULT) < 0 || info.type != H5L_TYPE_HARD) return false;
-  H5O_info_t oi;
-  return H5Oget_info_by_name2(loc, name.c_str(), &oi, H5O_INFO_BASIC, H5P_DEFAULT) >= 0 && oi.type == H5O_TYPE_GROUP;
+void set_own_attrs(hid_t file, const IndexHead& head, const std::string& prefix, long long top) {
+  set_attr(file, "store", head.store);
+  set_attr(file, "links_to", prefix);
+  set_attr(file, "runs_indexed", top);
+}
+
+// /runs/<name> → <prefix>/<file>, object /runs/<name>; a name taken already (two files of one run
+// name) or holding a '/' links nothing: readers list the folder, not the links.
+void link_run(hid_t runs, const StoredRun& r, const std::string& prefix) {
+  if (r.name.find('/') != std::string::npos || H5Lexists(runs, r.name.c_str(), H5P_DEFAULT) > 0) return;
+  check(H5Lcreate_external((prefix + "/" + r.file).c_str(), ("/runs/" + r.name).c_str(), runs, r.name.c_str(), H5P_DEFAULT,
+                           H5P_DEFAULT),
+        "link run " + r.name);
+}
+
+long long top_number(const std::vector<StoredRun>& runs) {
+  long long top = 0;
+  for (const auto& r : runs) top = std::max(top, r.number);
+  return top;
+}
+
+std::vector<char> whole_index(const IndexHead& head, const std::vector<StoredRun>& runs, const std::string& prefix) {
+  H f = create_memory_file();
+  for (const auto& [k, v] : head.attrs)
+    if (!own_attr(k)) write_attr(f, k, v);
+  set_own_attrs(f, head, prefix, top_number(runs));
+  H g(H5Gcreate2(f, "runs", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  check_id(g, "create group /runs");
+  for (const auto& r : runs) link_run(g, r, prefix);
+  return file_image(f);
+}
+
+// The index on disk with the runs after head.indexed added; empty when it must be built whole.
+std::vector<char> added_index(const std::string& path, const IndexHead& head, const std::vector<StoredRun>& runs,
+                              const std::string& prefix) {
+  if (head.kind != IndexHead::Kind::store || head.links_to != prefix) return {};
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.empty()) return {};
+  H f = open_memory_image(bytes);
+  if (f < 0 || H5Lexists(f, "runs", H5P_DEFAULT) <= 0) return {};
+  {
+    H g(H5Gopen2(f, "runs", H5P_DEFAULT), H5Gclose);
+    if (g < 0) return {};
+    for (const auto& r : runs)
+      if (r.number > head.indexed) link_run(g, r, prefix);
+  }
+  set_own_attrs(f, head, prefix, std::max(head.indexed, top_number(runs)));
+  std::vector<char> image = file_image(f);
+  // HDF5 does not reuse the space an update frees: rebuilt whole once the file is twice the size
+  // of a whole one (estimated from its links: ~50 bytes and their names each).
+  size_t whole = 8192;
+  for (const auto& r : runs) whole += 48 + 2 * r.name.size() + r.file.size() + prefix.size() + 10;
+  return image.size() > 2 * whole ? std::vector<char>{} : image;
 }
 
 }  // namespace
 
-std::string runs_folder(const std::string& path) { return path + ".runs"; }
-std::string results_lock_path(const std::string& path) { return runs_folder(path) + "/lock"; }
-
-RunFiles::~RunFiles() {
+IndexHead read_index_head(const std::string& path) {
+  IndexHead head;
   std::error_code ec;
-  for (const auto& f : files_) fs::remove(f, ec);
+  if (!fs::exists(path, ec)) return head;
+  H f = open_file(path);
+  const Kind k = link_kind(f, "/runs");
+  if (k == Kind::missing) throw Error(path + ": not an xpbd-bench results file (no group /runs)");
+  if (k != Kind::group) throw Error(path + ": /runs is " + std::string(kind_text(k)) + ", expected the group of runs");
+  head.attrs = read_attrs(f, path + ": root");
+  head.store = text_attr(head.attrs, "store");
+  head.writer = text_attr(head.attrs, "writer");
+  head.links_to = text_attr(head.attrs, "links_to");
+  if (auto it = head.attrs.find("runs_indexed"); it != head.attrs.end())
+    if (const auto* n = std::get_if<long long>(&it->second)) head.indexed = *n;
+  head.kind = is_store_name(head.store) ? IndexHead::Kind::store : IndexHead::Kind::older;
+  return head;
 }
 
-std::string RunFiles::write(const std::string& name, const std::function<void(hid_t)>& fill) {
-  std::string base = name;
-  for (char& c : base)
-    if (c == '/') c = '_';
-  const std::string file = base + "." + random_hex8() + ".h5";
+IndexHead new_index_head(const std::string& store, const std::string& writer) {
+  IndexHead head;
+  head.kind = IndexHead::Kind::store;
+  head.store = store;
+  head.writer = writer;
+  head.attrs = {{"schema_version", static_cast<long long>(schema_version)},
+                {"generator", std::string("xpbd-bench")},
+                {"writer", writer}};
+  return head;
+}
+
+std::string store_folder_of(const std::string& path, const IndexHead& head) {
+  const std::string own = store_folder(path, head.store);
+  std::error_code ec;
+  if (fs::is_directory(own, ec) || head.links_to.empty() || fs::path(head.links_to).is_absolute()) return own;
+  const fs::path linked = fs::path(path).parent_path() / head.links_to;
+  return fs::is_directory(linked, ec) ? linked.string() : own;
+}
+
+std::string links_prefix(const std::string& path, const std::string& store) {
+  return fs::path(runs_folder(path)).filename().string() + "/" + store;
+}
+
+long long write_index(const std::string& path, const IndexHead& head, const std::vector<StoredRun>& runs, bool whole) {
+  const std::string prefix = links_prefix(path, head.store);
   std::vector<char> image;
-  {
-    H f = create_memory_file();
-    write_file_attrs(f);
-    fill(f);
-    image = file_image(f);
-  }
-  TmpFile out(runs_folder(path_) + "/" + file, path_, true);
-  out.write(image.data(), image.size());
-  out.commit();
-  files_.push_back(out.target());
-  return link_prefix(path_) + file;
-}
-
-Index new_index(const std::string& writer) {
-  std::map<std::string, AttrValue> attrs{{"schema_version", static_cast<long long>(schema_version)},
-                                         {"generator", std::string("xpbd-bench")}};
-  if (!writer.empty()) attrs["writer"] = writer;
-  return index_with(attrs);
-}
-
-Index carry_index(const std::string& path, RunFiles& made) {
-  H old = open_file(path);
-  if (link_kind(old, "/runs") != Kind::group)
-    throw Error(path + ": not an xpbd-bench results file (no group /runs); refusing to append to it");
-  Index index = index_with(read_attrs(old, path + ": root"));
-  for (const auto& name : link_names(old, path))
-    if (name != "runs") copy_link(old, index.file, name, path);
-  H runs = open_group(old, "/runs", path);
-  const std::string prefix = link_prefix(path);
-  for (const auto& name : link_names(runs, path + ": /runs")) {
-    if (inline_group(runs, name)) {  // moved out to a run file once: later appends do not copy it
-      link_run(index, name, made.write(name, [&](hid_t f) {
-        H lcpl = link_create_plist();
-        check(H5Ocopy(runs, name.c_str(), f, ("/runs/" + name).c_str(), H5P_DEFAULT, lcpl), "copy run " + name);
-      }));
-      continue;
-    }
-    const std::string file = copy_link(runs, index.runs, name, path + ": /runs");
-    index.names.push_back(name);
-    if (file.starts_with(prefix)) index.linked.insert(file.substr(prefix.size()));
-  }
-  return index;
-}
-
-int next_run_number(const Index& index) {
-  long long last = static_cast<long long>(index.names.size());
-  for (const auto& n : index.names) {
-    const size_t cut = n.find('_');
-    if (cut == 0 || cut == std::string::npos || cut > 9) continue;
-    bool digits = true;
-    for (size_t i = 0; i < cut; ++i) digits = digits && std::isdigit(static_cast<unsigned char>(n[i]));
-    if (digits) last = std::max(last, std::stoll(n.substr(0, cut)));
-  }
-  return static_cast<int>(last + 1);
-}
-
-void link_run(Index& index, const std::string& name, const std::string& file) {
-  check(H5Lcreate_external(file.c_str(), ("/runs/" + name).c_str(), index.runs, name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
-        "link run " + name);
-  index.names.push_back(name);
-  index.linked.insert(fs::path(file).filename().string());
-}
-
-void write_run(hid_t file, const RunRecord& r, const std::string& name) {
-  H lcpl = link_create_plist();
-  const std::string path = "/runs/" + name;
-  if (H5Lexists(file, "/runs", H5P_DEFAULT) > 0 && H5Lexists(file, path.c_str(), H5P_DEFAULT) > 0)
-    throw Error("results file already has a run named '" + name + "'");
-  H g(H5Gcreate2(file, path.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
-  check_id(g, "create group " + path);
-  for (const auto& [k, v] : r.attrs) write_attr(g, k, v);
-  for (const auto& [k, v] : r.datasets) write_dataset(g, k, v);
-}
-
-void commit_index(const std::string& path, const Index& index) {
-  const std::vector<char> image = file_image(index.file);
+  if (!whole) image = added_index(path, head, runs, prefix);
+  if (image.empty()) image = whole_index(head, runs, prefix);
   TmpFile out(path, path, true);
   out.write(image.data(), image.size());
   out.commit();
+  return std::max(whole ? 0 : head.indexed, top_number(runs));
 }
 
-namespace {
-// Whether the file starts with HDF5's signature (at 0: files we write have no user block).
-bool looks_hdf5(const fs::path& p) {
-  char sig[8] = {};
-  FILE* f = std::fopen(p.c_str(), "rb");
-  if (!f) return false;
-  const bool ok = std::fread(sig, 1, 8, f) == 8 && std::memcmp(sig, "\x89HDF\r\n\x1a\n", 8) == 0;
-  std::fclose(f);
-  return ok;
+std::vector<IndexMember> index_members(hid_t runs, const std::string& where) {
+  struct Ctx {
+    std::vector<IndexMember> out;
+    std::string error;
+  } ctx;
+  const herr_t e = H5Literate(
+      runs, H5_INDEX_NAME, H5_ITER_INC, nullptr,
+      [](hid_t g, const char* name, const H5L_info_t* info, void* data) -> herr_t {
+        auto* c = static_cast<Ctx*>(data);
+        IndexMember m;
+        m.name = name;
+        if (info->type == H5L_TYPE_EXTERNAL) {
+          std::vector<char> buf(info->u.val_size + 1, '\0');
+          const char *file = nullptr, *object = nullptr;
+          unsigned flags = 0;
+          if (H5Lget_val(g, name, buf.data(), buf.size(), H5P_DEFAULT) < 0 ||
+              H5Lunpack_elink_val(buf.data(), info->u.val_size, &flags, &file, &object) < 0 || !file || !object) {
+            c->error = std::string("cannot read external link ") + name;
+            return -1;
+          }
+          m.kind = IndexMember::Kind::external;
+          m.file = file;
+          m.object = object;
+        } else if (info->type == H5L_TYPE_HARD) {
+          H5O_info_t oi;
+          if (H5Oget_info_by_name2(g, name, &oi, H5O_INFO_BASIC, H5P_DEFAULT) >= 0 && oi.type == H5O_TYPE_GROUP)
+            m.kind = IndexMember::Kind::group;
+        }
+        c->out.push_back(std::move(m));
+        return 0;
+      },
+      &ctx);
+  if (!ctx.error.empty()) throw Error(where + ": " + ctx.error);
+  if (e < 0) throw Error(where + ": cannot list its members");
+  return ctx.out;
 }
 
-// The run files of FILE.runs/ that another results file in FILE's folder links (a copy of the
-// index, or FILE renamed): a replaced FILE must not take them with it.
-std::set<std::string> linked_by_others(const std::string& path) {
-  std::set<std::string> linked;
-  const fs::path dir = fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path();
-  const std::string prefix = link_prefix(path);
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    std::error_code same;
-    if (!it->is_regular_file(same) || fs::equivalent(it->path(), path, same) || !looks_hdf5(it->path())) continue;
-    try {
-      H f = open_file(it->path().string());
-      if (link_kind(f, "/runs") != Kind::group) continue;
-      H runs = open_group(f, "/runs", it->path().string());
-      for (const auto& name : link_names(runs, it->path().string())) {
-        H5L_info_t info;
-        if (H5Lget_info(runs, name.c_str(), &info, H5P_DEFAULT) < 0 || info.type != H5L_TYPE_EXTERNAL) continue;
-        const std::string file = link_value(runs, name, info, it->path().string()).first;
-        if (file.starts_with(prefix)) linked.insert(file.substr(prefix.size()));
-      }
-    } catch (const Error&) {  // a damaged file links nothing we keep for it
-    }
-  }
-  return linked;
-}
-}  // namespace
-
-void collect_garbage(const std::string& path, const Index& index, bool replaced) {
-  remove_stale_temporaries(path, true);
-  std::set<std::string> keep = index.linked;
-  if (replaced) keep.merge(linked_by_others(path));
-  std::error_code ec;
-  for (fs::directory_iterator it(runs_folder(path), ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    std::error_code rm;
-    if (name.ends_with(".tmp") || (replaced && is_run_file(name) && !keep.count(name))) fs::remove(it->path(), rm);
-    if (name.starts_with("queue-")) remove_unused_counter(it->path().string());  // a killed sweep's (file_lock.hpp)
-  }
-}
-
-std::vector<char> packed_image(const std::string& src, std::vector<std::string>& skipped) {
-  H in = open_file(src);
-  const Kind k = link_kind(in, "/runs");
-  if (k != Kind::group) throw Error(src + ": not an xpbd-bench results file (/runs is " + kind_text(k) + ")");
-  H in_runs = open_group(in, "/runs", src);
-  H out = create_memory_file();
-  for (const auto& [key, v] : read_attrs(in, src + ": root"))
-    if (key != "writer") write_attr(out, key, v);
-  H out_runs(H5Gcreate2(out, "runs", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
-  check_id(out_runs, "create group /runs");
-  for (const auto& name : link_names(in_runs, src + ": /runs")) {
-    const Kind rk = link_kind(in_runs, name);
-    if (rk != Kind::group) {
-      skipped.push_back(src + ": run " + name + " is " + kind_text(rk) + ", not a run group");
-      continue;
-    }
-    // Through the link: the run's group itself, with everything in it.
-    check(H5Ocopy(in_runs, name.c_str(), out_runs, name.c_str(), H5P_DEFAULT, H5P_DEFAULT), "copy run " + name);
-  }
-  return file_image(out);
+std::string link_target(const std::string& path, const std::string& file) {
+  const fs::path f(file);
+  if (f.is_absolute()) return file;
+  const fs::path dir = fs::path(path).parent_path();
+  const std::string first = f.begin() == f.end() ? "" : f.begin()->string();
+  if (first.size() > 5 && first.ends_with(".runs"))
+    return (fs::path(runs_folder(path)) / f.lexically_relative(first)).string();
+  return (dir / f).string();
 }
 
 }  // namespace xb

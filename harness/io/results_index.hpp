@@ -1,70 +1,63 @@
-// The parts of a results file (recorder.hpp) as an append builds them: the index FILE (root
-// attributes, /runs/<name> external links) in memory, and one file per run in FILE.runs/.
-// Everything here runs under FILE's exclusive lock and the HDF5 Guard (recorder.cpp).
+// The index of a results file (recorder.hpp): FILE.h5 itself, what h5py and every HDF5 tool open.
+// Its root attributes (schema_version, generator, writer: who started the file; store: the folder
+// FILE.h5.runs/<store>/ of its run files; links_to: the folder its links name; runs_indexed: the
+// largest run number it links) and /runs/<name>, an HDF5 external link to each run's group in its
+// run file. The run files are the truth (run_store.hpp); the index is rebuilt from them, replaced
+// whole (a temporary file renamed over FILE), never modified in place, so a reader holds one
+// complete version or the next. A file written before stores (its runs inline: `pack`'s, or older
+// ones; or external links to FILE.h5.runs/<name>.<8 hex>.h5) has no `store`: read as it is and
+// moved into a store by its first writer (store_upkeep.hpp).
 #pragma once
 
 #include "h5handle.hpp"
 #include "record.hpp"
+#include "run_store.hpp"
 
-#include <functional>
-#include <set>
+#include <map>
 #include <string>
 #include <vector>
 
 namespace xb {
 
-// FILE.runs: the folder of a results file's runs (and of its lock).
-std::string runs_folder(const std::string& path);
-// FILE.runs/lock: the lock file of a results file (file_lock.hpp).
-std::string results_lock_path(const std::string& path);
-
-// An index being built, in memory.
-struct Index {
-  h5::H file{H5I_INVALID_HID, nullptr}, runs{H5I_INVALID_HID, nullptr};  // the file and its /runs
-  std::string writer;              // the attribute `writer`: who started the file
-  std::vector<std::string> names;  // the links under /runs
-  std::set<std::string> linked;    // the run files they link, as names in FILE.runs/
+struct IndexHead {
+  enum class Kind { absent, store, older };  // older: inline groups or links of the earlier layout
+  Kind kind = Kind::absent;
+  std::string store, writer, links_to;
+  long long indexed = 0;                   // runs_indexed
+  std::map<std::string, AttrValue> attrs;  // every root attribute
 };
 
-// The run files an append writes, FILE.runs/<name>.<8 hex>.h5: removed again when the append
-// fails (the destructor), unless keep() was called once the index linking them was in place.
-class RunFiles {
- public:
-  explicit RunFiles(std::string path) : path_(std::move(path)) {}
-  ~RunFiles();
-  RunFiles(const RunFiles&) = delete;
-  RunFiles& operator=(const RunFiles&) = delete;
-  // Writes one run file, a results file of its own: the root attributes and what `fill` adds to
-  // the file in memory (the group /runs/<name>). Returns its name relative to FILE's folder, as the
-  // index links it. Throws WriteError naming FILE.
-  std::string write(const std::string& name, const std::function<void(hid_t)>& fill);
-  void keep() { files_.clear(); }
+// The index's root attributes. absent when there is no file at `path` (a resolved path,
+// run_store.hpp). Throws xb::Error for a file that is not HDF5 or has no group /runs.
+IndexHead read_index_head(const std::string& path);
+// A new index head for a store started by `writer`.
+IndexHead new_index_head(const std::string& store, const std::string& writer);
 
- private:
-  std::string path_;
-  std::vector<std::string> files_;
+// The folder of the index's store: FILE.runs/<store>, or where no such folder is (FILE renamed
+// without it) the one its links name, relative to FILE's folder, when that one is there.
+std::string store_folder_of(const std::string& path, const IndexHead& head);
+// "r.h5.runs/<store>": the store folder as the index's links name it, relative to FILE's folder.
+std::string links_prefix(const std::string& path, const std::string& store);
+
+// Writes the index of `head`'s store for `runs` (its listing) as FILE, atomically, under FILE's lock.
+// whole = false adds to the index on disk the runs numbered after head.indexed, copying the rest
+// as it is (a copy of its bytes, no link rebuilt); it is built whole instead when the index on disk
+// is not that store's, names the folder otherwise (FILE renamed), or cannot be read. Returns the
+// largest run number the new index links. Throws WriteError naming FILE.
+long long write_index(const std::string& path, const IndexHead& head, const std::vector<StoredRun>& runs, bool whole);
+
+// A member of /runs in an index: a run group stored in it, an external link, or something else.
+struct IndexMember {
+  enum class Kind { group, external, other };
+  std::string name;
+  Kind kind = Kind::other;
+  std::string file, object;  // an external link's target
 };
-
-// A new, empty index started by `writer`.
-Index new_index(const std::string& writer);
-// A new index holding every root attribute and link of the file at `path`: external links as they
-// are, runs stored inline (a packed or older file) written out as run files through `made`.
-// Throws xb::Error for a file that is not a results file.
-Index carry_index(const std::string& path, RunFiles& made);
-// The number the next run takes: one more than the largest NNNN of "NNNN_..." and than the count.
-int next_run_number(const Index& index);
-// /runs/<name> → `file` (relative to FILE's folder), object /runs/<name>.
-void link_run(Index& index, const std::string& name, const std::string& file);
-// The group /runs/<name> of a run in `file`. Throws xb::Error for a name it already holds.
-void write_run(hid_t file, const RunRecord& r, const std::string& name);
-// Writes the index as FILE, atomically. Throws WriteError naming FILE.
-void commit_index(const std::string& path, const Index& index);
-// Removes what no writer uses (the caller holds the lock): temporary files of FILE and in
-// FILE.runs/; when FILE was `replaced` (run --out, pack), also the run files that neither `index`
-// nor another results file in FILE's folder links (the replaced file's, or left by a killed writer).
-void collect_garbage(const std::string& path, const Index& index, bool replaced);
-// One self-contained file (every run a group, copied through its link) holding the runs of `src`;
-// runs that cannot be read are left out and named in `skipped`. Throws xb::Error naming src.
-std::vector<char> packed_image(const std::string& src, std::vector<std::string>& skipped);
+// Every member of /runs, in name order (one pass: H5Literate). Throws xb::Error naming `where`.
+std::vector<IndexMember> index_members(hid_t runs, const std::string& where);
+// The file an external link of the index at `path` (resolved) names, as this project resolves it:
+// "<x>.runs/<rest>" is `path`.runs/<rest> (the runs folder beside FILE, whatever FILE is called
+// now); another relative name is relative to FILE's folder, never to the working directory.
+std::string link_target(const std::string& path, const std::string& file);
 
 }  // namespace xb

@@ -144,15 +144,15 @@ void add_newton_attributes(RunRecord& r, const IterationLog& L) {
     r.datasets["reference/relative_energy_gradient"] = L.reference_relative_energy_gradient;
   }
 }
-// The measure the run's stop test read (results/README.md): ‖∇E‖ under step = newton (its dual
+// The measure the run's stop test read (results/README.md): ‖∇E‖ under step = newton and vbd/avbd (its dual
 // residual is rounding over rounding there: λ = −α̃⁻¹C), else the dual residual `residual_metric`
 // names; its last value and that over the same substep's first, so `report` shows each run's own.
-void add_convergence_attributes(RunRecord& r, const Params& p, const IterationLog& L) {
+void add_convergence_attributes(RunRecord& r, const Params& p, bool block_descent, const IterationLog& L) {
   if (L.iteration.empty()) return;
   size_t first = L.iteration.size() - 1;
   while (first > 0 && L.iteration[first] != 0) --first;
   double last = 0, start = 0;
-  if (p.step == "newton") {  // g = h²∇E: ‖∇E‖ = ‖g‖/h², in N
+  if (p.step == "newton" || block_descent) {  // g = h²∇E: ‖∇E‖ = ‖g‖/h², in N
     const double h = p.dt / p.substeps;
     r.attrs["convergence_measure"] = std::string("energy_gradient");
     last = L.primal_residual.back() / (h * h);
@@ -168,6 +168,44 @@ void add_convergence_attributes(RunRecord& r, const Params& p, const IterationLo
   }
   r.attrs["final_convergence"] = last;
   r.attrs["final_relative_convergence"] = start > 0 ? last / start : 0.0;
+}
+// The reference of every substep (harness/sim/reference.hpp), its certificate and the error against
+// it (results/README.md, the reference/ group).
+void add_reference_records(RunRecord& r, const RunResult& res) {
+  const IterationLog& L = res.log;
+  r.attrs["reference_method"] = res.reference_method;
+  double worst = 0, estimate = 0, threshold = 0;
+  long long unconverged = 0, uncertified = 0;
+  for (size_t i = 0; i < L.reference_status.size(); ++i) {
+    worst = std::max(worst, L.reference_relative_dual_residual[i]);
+    if (!L.reference_success[i]) ++unconverged;
+    if (!L.reference_certified[i]) ++uncertified;
+    estimate = std::max(estimate, L.reference_error_estimate[i]);  // ∞ wins; NaN never occurs
+    threshold = std::max(threshold, L.reference_certified_threshold[i]);
+  }
+  r.attrs["reference_dual_residual"] = worst;
+  r.attrs["reference_substeps_unconverged"] = unconverged;
+  r.attrs["reference_substeps_uncertified"] = uncertified;
+  r.attrs["reference_error_estimate"] = estimate;
+  r.attrs["reference_certified_threshold"] = threshold;
+  r.attrs["reference_time"] = res.reference_time;
+  r.datasets["position_error"] = L.position_error;
+  r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
+  r.datasets["reference/iterations"] = L.reference_iterations;
+  r.datasets["reference/status"] = L.reference_status;
+  r.datasets["reference/success"] = L.reference_success;
+  r.datasets["reference/time"] = L.reference_time;
+  r.datasets["reference/energy_gradient"] = L.reference_energy_gradient;
+  r.datasets["reference/gradient_floor"] = L.reference_gradient_floor;
+  r.datasets["reference/error_scale"] = L.reference_error_scale;
+  r.datasets["reference/error_estimate"] = L.reference_error_estimate;
+  r.datasets["reference/contraction"] = L.reference_contraction;
+  r.datasets["reference/certified"] = L.reference_certified;
+  r.datasets["reference/certified_threshold"] = L.reference_certified_threshold;
+  r.datasets["reference/certificate_note"] = L.reference_certificate_note;
+  if (!L.reference_source.empty()) r.datasets["reference/source"] = L.reference_source;
+  if (!res.reference_file.empty()) r.attrs["reference_file"] = res.reference_file;
+  if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
 }
 }  // namespace
 
@@ -186,7 +224,8 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   r.attrs["outer_iterations"] = res.outer_iterations;
   r.attrs["final_dual_residual"] = res.final_dual_residual;
   add_newton_attributes(r, res.log);
-  add_convergence_attributes(r, p, res.log);
+  const MethodInfo* info = find_method(method);
+  add_convergence_attributes(r, p, info && info->block_descent, res.log);
   r.attrs["relative_dual_residual"] = res.relative_dual_residual;
   r.attrs["wall_time"] = res.wall_time;
   r.attrs["substeps_total"] = static_cast<long long>(res.substeps_total);
@@ -199,6 +238,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
   for (const auto& a : log_arrays)
     if (!a.global_only || global) std::visit([&](auto member) { r.datasets[a.name] = L.*member; }, a.member);
   r.datasets["substep_status"] = L.substep_status;
+  r.datasets["substep_success"] = L.substep_success;
   if (!L.relative_gradient_floor.empty()) {  // step = newton
     r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;
     r.datasets["active_bounds"] = L.active_bounds;
@@ -215,25 +255,7 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["trust_region_negative_curvature"] = L.trust_region_negative_curvature;
     r.datasets["trust_region_rejections"] = L.trust_region_rejections;
   }
-  if (!L.reference_status.empty()) {
-    // The reference of every substep (harness/sim/reference.hpp) and the error against it.
-    r.attrs["reference_method"] = res.reference_method;
-    double worst = 0;
-    long long unconverged = 0;
-    for (size_t i = 0; i < L.reference_status.size(); ++i) {
-      worst = std::max(worst, L.reference_relative_dual_residual[i]);
-      if (L.reference_status[i] != "converged" && L.reference_status[i] != "rounding_floor") ++unconverged;
-    }
-    r.attrs["reference_dual_residual"] = worst;
-    r.attrs["reference_substeps_unconverged"] = unconverged;
-    r.attrs["reference_time"] = res.reference_time;
-    r.datasets["position_error"] = L.position_error;
-    r.datasets["reference/relative_dual_residual"] = L.reference_relative_dual_residual;
-    r.datasets["reference/iterations"] = L.reference_iterations;
-    r.datasets["reference/status"] = L.reference_status;
-    r.datasets["reference/time"] = L.reference_time;
-    if (!L.position_error.empty()) r.attrs["final_position_error"] = L.position_error.back();
-  }
+  if (!L.reference_status.empty()) add_reference_records(r, res);
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());
   r.datasets["final_positions"] = pos;
   return r;

@@ -67,24 +67,40 @@ struct IterationLog {
   // [linear_history_offset[i], linear_history_offset[i+1]).
   std::vector<double> linear_history_residual, linear_history_time;
   std::vector<long long> linear_history_offset{0};
-  // With RunOptions::reference only: per entry ‖x − x_ref‖_M / ‖x_ref − x̃‖_M (x_ref from
-  // harness/sim/reference.hpp, recomputed every substep from the run's own x̃), and per substep
-  // what the reference reached.
+  // With RunOptions::reference only: per entry ‖x − x_ref‖_M over the substep's error scale (x_ref
+  // from harness/sim/reference.hpp, recomputed every substep from the run's own x̃; the scale
+  // ReferenceSolution::error_scale), and per substep what the reference reached and its
+  // certificate (harness/sim/certificate.hpp).
   std::vector<double> position_error;
   std::vector<double> reference_relative_dual_residual;
   std::vector<double> reference_relative_energy_gradient;  // ‖∇E‖/‖∇E(x̃)‖ of the reference (every α̃ > 0)
   std::vector<long long> reference_iterations;
   std::vector<std::string> reference_status;
+  std::vector<long long> reference_success;  // stop_reason_success of reference_status (1: a solution)
+  std::vector<double> reference_energy_gradient, reference_gradient_floor;  // ‖∇E‖ (free) at x_ref, its floor; N
+  std::vector<double> reference_error_scale;      // position_error's denominator
+  std::vector<double> reference_error_estimate;   // the bound on ‖x_ref − x*‖_M over the scale (∞: none)
+  std::vector<double> reference_contraction;      // q of that bound (NaN: no step)
+  std::vector<long long> reference_certified;     // 1: positive definite on the free set and a bound
+  std::vector<double> reference_certified_threshold;  // the finest threshold trusted (∞: none)
+  std::vector<std::string> reference_certificate_note;  // why not certified ("" where it is)
   std::vector<double> reference_time;  // s of each substep's reference (off every clock)
+  // Per substep, where its reference came from (RunOptions::reference_file): read (from the
+  // file), stored (computed here and added to it) or computed (here; not stored: no file, or the
+  // file holds one of another x̃ for that substep).
+  std::vector<std::string> reference_source;
   // Per substep, how its outer loop ended: converged | max_iterations for XPBD's methods; under
   // step = newton the stop reason (harness/sim/stop_reason.hpp: converged, rounding_floor,
-  // max_iterations, line_search_failed). A substep that ends the run has none.
+  // line_search_at_floor, max_iterations, line_search_failed), and the one success predicate's
+  // value for it (stop_reason_success: 1 for converged or rounding_floor). A substep that ends
+  // the run has none.
   std::vector<std::string> substep_status;
+  std::vector<long long> substep_success;
 };
 
 struct RunResult {
   // ok | max_iterations | line_search_failed | reference_unconverged | diverged | nan | breakdown |
-  // timeout | error (results/README.md)
+  // over_budget | out_of_memory | error (results/README.md)
   std::string status = "ok";
   std::string message;
   std::string form_used;      // dual | primal for global methods, none for local sweeps
@@ -95,6 +111,7 @@ struct RunResult {
   double wall_time = 0;             // s, the whole run (without the reference's time)
   double reference_time = 0;        // s spent on references and errors (excluded from every clock)
   std::string reference_method;     // how the reference was computed ("" = no reference)
+  std::string reference_file;       // the file of stored references ("" = none)
   int substeps_converged = 0, substeps_total = 0;
   std::map<std::string, double> stats;                     // solver statistics (+ run extras)
   std::map<std::string, std::vector<double>> arrays;       // per-level and similar arrays

@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <utility>
-#include <limits>
 
 namespace xb {
 
@@ -31,7 +30,7 @@ EnergySearch EnergyLineSearch::search(const LineSearchStart& start, const Eigen:
   s.energy = start.energy;
   const double h2 = h_ * h_;
   if (!(particle_dot(prob_, start.g, start.dx) < 0)) return s;  // not a descent direction (or NaN)
-  const double rounding = energy_rounding_factor * std::numeric_limits<double>::epsilon() * std::abs(start.energy);
+  const double rounding = 2 * start.energy_rounding;  // of E(x(t)) − E(x): both E's
   Eigen::Matrix3Xd step;
   for (double t = 1; t >= energy_search_min_step; t *= 0.5) {
     trial.x = start.x + t * start.dx;

@@ -2,8 +2,9 @@
 // t = 1, 1/2, …, 1e-9 (P: the plane bounds' projection, the identity without colliders). The
 // decrease is measured against the slope along the path, Δ(t) = ∇E·(x(t) − x) < 0:
 //  - armijo: E(x(t)) ≤ E(x) + c·Δ(t), c = 1e-4 (sufficient decrease);
-//  - robust_armijo (the default): the same, and where the computed E(x(t)) − E(x) is within E's
-//    own rounding (κ_E ε|E|, κ_E = 1e3) the change of E by the trapezoid rule on the gradients,
+//  - robust_armijo (the default): the same, and where the computed E(x(t)) − E(x) is within the
+//    rounding of the two E's (2·energy_rounding(x), harness/sim/newton.hpp) the change of E by the
+//    trapezoid rule on the gradients,
 //    ΔE ≈ ½(x(t) − x)·(∇E(x) + ∇E(x(t))) ≤ c·Δ(t): exact for a quadratic and free of E's
 //    cancellation, so a stiff scene keeps descending below E's resolution, where plain Armijo
 //    blocks (Longva et al. 2023's robust line search; polysolve's RobustArmijo, without its
@@ -28,7 +29,6 @@ LineSearchKind parse_line_search(const std::string& name);  // throws xb::Error 
 
 constexpr double armijo_c = 1e-4;
 constexpr double energy_search_min_step = 1e-9;  // below it the search has failed (30 halvings)
-constexpr double energy_rounding_factor = 1e3;   // κ_E
 
 struct EnergySearch {
   double t = 0;             // the step taken (0: failed)
@@ -38,12 +38,14 @@ struct EnergySearch {
   double energy = 0;        // E at the accepted trial (E(x) if failed)
 };
 
-// What the search reads at x: E(x), g = h²∇E(x) per particle (0 at pins).
+// What the search reads at x: E(x), g = h²∇E(x) per particle (0 at pins), and E's rounding at x
+// (energy_rounding; 0: the trapezoid test never engages).
 struct LineSearchStart {
   const Eigen::Matrix3Xd& x;
   const Eigen::Matrix3Xd& dx;
   const Eigen::Matrix3Xd& g;
   double energy;
+  double energy_rounding = 0;
 };
 
 // The trial's state, kept for the caller: x(t), its constraints and h²∇E(x(t)).

@@ -100,9 +100,7 @@ LinearStats GlobalStep::solve(const GlobalStepInput& in, SetupKind kind, SetupCo
   setup_primal(in, kind, ctx);
   const std::vector<int>& free = primal_->system().free_particles();
   const long nb = static_cast<long>(free.size());
-  g_dof_.resize(3 * nb);
-  for (long i = 0; i < nb; ++i) g_dof_.segment<3>(3 * i) = in.g.col(free[i]);
-  for (int d : held_dofs_) g_dof_[d] = 0;
+  to_dofs(in.g, g_dof_);
   const LinearStats st = primal_->solve(in.b, dlambda, keep_ ? &g_dof_ : nullptr, &dx_dof_);
   dx.setZero(3, prob_.particles.size());
   if (dx_dof_.size() == 3 * nb) {
@@ -129,21 +127,50 @@ void GlobalStep::setup_primal(const GlobalStepInput& in, SetupKind kind, SetupCo
     top_.inv_mass = &minv_dof_;
     top_.fill = [this, &grad](PrimalSystem& sys) { sys.fill_with_diagonal(grad, alpha_tilde_, kd_); };
   } else if (stiffness_ == "full" && newton_) {
-    held_dofs_.clear();
-    if (in.held && !in.held->empty()) {  // y of particle free[i] is K's row 3i + 1
-      std::vector<int> block(prob_.particles.size(), -1);
-      for (long i = 0; i < nb; ++i) block[free[i]] = static_cast<int>(i);
-      for (int p : *in.held)
-        if (block[p] >= 0) held_dofs_.push_back(3 * block[p] + 1);
-    }
-    top_.fill = [this](PrimalSystem& sys) {
-      sys.fill_energy_hessian(elements_->blocks());
-      sys.fix_dofs(held_dofs_);
-    };
+    newton_top(in);
   } else if (stiffness_ == "full") {
     top_.fill = [this, &grad](PrimalSystem& sys) { sys.fill_with_blocks(grad, alpha_tilde_, elements_->blocks()); };
   }
   primal_->setup(in.state.grad, alpha_tilde_, in.x, kind, ctx, top_);
+}
+
+void GlobalStep::newton_top(const GlobalStepInput& in) {
+  const std::vector<int>& free = primal_->system().free_particles();
+  held_dofs_.clear();
+  if (in.held && !in.held->empty()) {  // y of particle free[i] is K's row 3i + 1
+    std::vector<int> block(prob_.particles.size(), -1);
+    for (size_t i = 0; i < free.size(); ++i) block[free[i]] = static_cast<int>(i);
+    for (int p : *in.held)
+      if (block[p] >= 0) held_dofs_.push_back(3 * block[p] + 1);
+  }
+  top_ = TopLeftBlock{};
+  top_.fill = [this](PrimalSystem& sys) {
+    sys.fill_energy_hessian(elements_->blocks());
+    sys.fix_dofs(held_dofs_);
+  };
+}
+
+void GlobalStep::to_dofs(const Eigen::Matrix3Xd& v, Vector& out) const {
+  const std::vector<int>& free = primal_->system().free_particles();
+  out.resize(3 * static_cast<long>(free.size()));
+  for (size_t i = 0; i < free.size(); ++i) out.segment<3>(3 * static_cast<long>(i)) = v.col(free[i]);
+  for (int d : held_dofs_) out[d] = 0;
+}
+
+double GlobalStep::curvature(const Eigen::Matrix3Xd& s) {
+  if (!primal_ || !newton_) throw Error("GlobalStep::curvature: step = newton in the primal form only");
+  to_dofs(s, work_dofs_);
+  return work_dofs_.dot(primal_->system().K() * work_dofs_);
+}
+
+const SparseMatrix& GlobalStep::fill_newton_system(const GlobalStepInput& in, Vector& g_dof) {
+  if (!primal_ || !newton_ || stiffness_ != "full")
+    throw Error("GlobalStep::fill_newton_system: step = newton with the full geometric stiffness only");
+  prepare(in);
+  newton_top(in);
+  primal_->fill(in.state.grad, alpha_tilde_, top_);
+  to_dofs(in.g, g_dof);
+  return primal_->system().K();
 }
 
 }  // namespace xb

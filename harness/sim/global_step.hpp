@@ -64,6 +64,13 @@ class GlobalStep {
   const std::vector<int>& held_dofs() const { return held_dofs_; }
   // Seconds filling K in the last primal setup.
   double primal_fill_time() const { return primal_ ? primal_->fill_time() : 0; }
+  // step = newton: sᵀKs for a step s per particle, K the last one filled (held dofs' s ignored):
+  // the curvature term of the quadratic model the step solved.
+  double curvature(const Eigen::Matrix3Xd& s);
+  // step = newton: K = M + Σπ(H_j) at in.x with in's projection and held bounds, filled without a
+  // solver setup, and g on its free dofs (the held ones 0): the certificate's system
+  // (harness/sim/certificate.hpp). K's rows: 3 per particle of primal()->system().free_particles().
+  const SparseMatrix& fill_newton_system(const GlobalStepInput& in, Vector& g_dof);
   // The element matrices of the last prepare() (geometric_stiffness = diagonal | full), or null.
   const ElementHessians* elements() const { return elements_ ? &*elements_ : nullptr; }
   ElementHessians* elements() { return elements_ ? &*elements_ : nullptr; }
@@ -71,6 +78,10 @@ class GlobalStep {
  private:
   void dual_step(const GlobalStepInput& in, const Vector& dlambda, Eigen::Matrix3Xd& dx);
   void setup_primal(const GlobalStepInput& in, SetupKind kind, SetupContext ctx);
+  // step = newton: held_dofs_ from in.held and top_ filling M + Σπ(H_j) with them held.
+  void newton_top(const GlobalStepInput& in);
+  // The free dofs' values of per-particle v (held dofs 0).
+  void to_dofs(const Eigen::Matrix3Xd& v, Vector& out) const;
 
   const Problem& prob_;
   DualSystem& ds_;
@@ -82,7 +93,7 @@ class GlobalStep {
   Eigen::Matrix3Xd minv_;                 // M̃⁻¹ per particle and axis (diagonal; 0 at pins)
   Eigen::Matrix3Xd kd_;                   // K̃_d per particle and axis (diagonal)
   std::optional<ElementHessians> elements_;  // diagonal, full
-  Vector minv_dof_, g_dof_, dx_dof_, rhs_;  // the primal form's per free DOF
+  Vector minv_dof_, g_dof_, dx_dof_, rhs_, work_dofs_;  // the primal form's per free DOF
   std::vector<int> held_dofs_;              // K's rows of the held y coordinates
   TopLeftBlock top_;
   Eigen::Matrix3Xd work_;

@@ -14,9 +14,12 @@
 //                  Fernández-Fernández et al. 2026, who select the projected elements by their
 //                  local residual; here by the eigenvalue, which at bunny:270k singles out the
 //                  ~0.5% of the elements that make K indefinite)
-//  trust_region    clamp while the model's prediction held at the last step (ρ = actual/predicted
-//                  decrease ≥ 1/4), abs where it did not (Chen et al. 2024)
-// Every strategy ends at the clamp of every element before giving up (the clamp is PSD).
+//  rho_switch      clamp while the quadratic model predicted the last step's decrease of E (ρ =
+//                  actual/predicted ≥ 1/4), abs where it did not (Chen et al. 2024's ρ-driven switch
+//                  between the two filters: no radius, no rejected step — not a trust region)
+// Every strategy ends at the clamp of every element before giving up (the clamp is PSD). The
+// predicted decrease is the model actually solved: −(gᵀs + ½sᵀKs) for the step s taken, K the
+// projected Hessian of the solve (newton_loop.cpp), exact or not.
 #pragma once
 
 #include "../stepper_settings.hpp"
@@ -27,11 +30,15 @@
 
 namespace xb {
 
+// The values of xpbd.hessian_projection, parsed once (parse_projection_strategy).
+enum class ProjectionStrategyKind { clamp, abs, adaptive, on_demand, progressive, rho_switch };
+// Throws xb::Error for an unknown name (the valid ones: hessian_projection_choices()).
+ProjectionStrategyKind parse_projection_strategy(const std::string& name);
+
 class ProjectionStrategy {
  public:
-  // Throws xb::Error for an unknown name.
-  ProjectionStrategy(const Problem& prob, const std::string& name, double exact_below);
-  const std::string& name() const { return name_; }
+  ProjectionStrategy(const Problem& prob, ProjectionStrategyKind kind, double exact_below);
+  ProjectionStrategyKind kind() const { return kind_; }
   void begin_substep();
   // The first try of iteration `it`; relative_gradient = ‖∇E‖ over its first value.
   ElementProjection first(int it, double relative_gradient);
@@ -44,9 +51,9 @@ class ProjectionStrategy {
 
  private:
   const Problem& prob_;
-  std::string name_;
+  ProjectionStrategyKind kind_;
   double exact_below_;
-  bool model_held_ = true;          // trust_region
+  bool model_held_ = true;          // rho_switch
   static constexpr double max_tau = 1e3;  // progressive: τ at which every element is exact
   double tau_ = 1;                  // progressive: the tolerated negative curvature
 };

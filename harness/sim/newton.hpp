@@ -35,6 +35,19 @@ void eliminate_multipliers(const ConstraintState& s, const Eigen::VectorXd& alph
 // the free particles. Below it ‖∇E‖ is noise: the stop reason rounding_floor (stop_reason.hpp).
 double gradient_rounding_floor(const Problem& prob, const DualSystem& ds, const ConstraintState& s,
                                const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde);
+// One sample of that rounding as it arises, per particle (0 at pins): each C_j off by ±ε·X_j‖∇C_j‖
+// carried by α̃_j⁻¹∇C_j, each inertia term by ±ε·m_p|x_p|, the signs fixed by a hash of the index
+// (the same sample every call). Its Newton step is the step that g's rounding makes
+// (harness/sim/certificate.hpp); the floor's absolute values would lose the directions.
+void gradient_rounding_sample(const Problem& prob, const DualSystem& ds, const ConstraintState& s,
+                              const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, Eigen::Matrix3Xd& n);
+
+// The rounding of the computed E at x (harness/sim/residual_energy.hpp), by the floor's model: each
+// term's error from its inputs' rounding — the inertia's m_p|x_p − x̃_p|·ε(|x_p| + |x̃_p|)/h², each
+// constraint's |C_j|·ε·X_j‖∇C_j‖/α_j — summed as independent errors (their 2-norm), plus ε·E for
+// the products and the sum. A change of E below it is noise (the line search's trapezoid test).
+double energy_rounding(const Problem& prob, const ConstraintState& s, const Eigen::Matrix3Xd& x,
+                       const Eigen::Matrix3Xd& x_pred, double h, double energy);
 
 // ‖∇E(x)‖ from the constraint state at x: ‖M(x − x̃) + ∇Cᵀα̃⁻¹C‖/h² over free particles.
 double energy_gradient_norm(const Problem& prob, const DualSystem& ds, const ConstraintState& s,

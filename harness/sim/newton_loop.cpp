@@ -10,16 +10,12 @@
 
 namespace xb {
 
-namespace {
-constexpr double divergence_factor = 1e8;  // ‖∇E‖ this much over its first value: diverged
-}
-
 NewtonSettings NewtonSettings::from(const Params& p) {
   NewtonSettings s;
-  s.rtol = p.rtol;
-  s.atol = p.atol;
-  s.max_iterations = p.max_iterations;
-  s.projection = p.hessian_projection;
+  s.stop.rtol = p.rtol;
+  s.stop.atol = p.atol;
+  s.stop.max_iterations = p.max_iterations;
+  s.projection = parse_projection_strategy(p.hessian_projection);
   s.exact_below = p.exact_hessian_below;
   s.line_search = parse_line_search(p.line_search);
   s.globalization = parse_globalization(p.globalization, "xpbd.globalization");
@@ -60,7 +56,7 @@ bool NewtonLoop::direction(int it, double relative, const Eigen::Matrix3Xd& x, S
                            const NewtonHooks& hooks, NewtonOutcome& out) {
   ElementProjection proj = strategy_.first(it, relative);
   for (;;) {
-    const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &active_, step_.elements() != nullptr};
+    const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &held_, step_.elements() != nullptr};
     if (hooks.phase) hooks.phase("the fill of the element Hessians");
     rec.hessians += step_.prepare(in);
     if (hooks.on_system && hooks.on_system(in, it)) {
@@ -119,19 +115,17 @@ NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& 
     const NewtonIterate view{it, x, state_, lambda_, g_, gn, out.gradient0, out.floor, energy_,
                              static_cast<int>(active_.size()), inverted, twist_sum, rec};
     if (hooks.on_iterate) hooks.on_iterate(view);
-    if (!std::isfinite(gn) || !std::isfinite(energy_) || !x.allFinite()) out.reason = StopReason::not_finite;
-    else if (gn > divergence_factor * out.gradient0 && gn > s_.atol) out.reason = StopReason::diverged;
-    else if (gn <= s_.rtol * out.gradient0 || gn <= s_.atol) out.reason = StopReason::converged;
-    else if (gn <= floor_factor * out.floor) out.reason = StopReason::rounding_floor;
-    else if (it >= s_.max_iterations) out.reason = StopReason::max_iterations;
-    else if (hooks.proceed && !hooks.proceed()) out.reason = StopReason::interrupted;
+    out.reason = s_.stop.test(it, gn, out.gradient0, out.floor, std::isfinite(energy_) && x.allFinite());
+    if (out.reason == StopReason::running && hooks.proceed && !hooks.proceed()) out.reason = StopReason::interrupted;
+    // The trust region looks past a solved gradient below the iteration limit: a saddle goes on.
     const bool solved = stop_reason_success(out.reason);
-    if (out.reason != StopReason::running && !(solved && tr_ && it < s_.max_iterations)) return out;
+    if (out.reason != StopReason::running && !(solved && tr_ && it < s_.stop.max_iterations)) return out;
 
     Timer clock;
     rec = StepRecord{};
     rec.tolerance = hooks.tolerance ? hooks.tolerance(it, gn) : 0;
     if (hooks.tolerance) step_.set_tolerance(rec.tolerance);
+    bounds_.active_set(x, g_, held_, bounds_.epsilon(x, g_));  // the step holds the ε-active set
     if (tr_) {  // the trust region's models; a gradient at its tolerance with negative curvature is a saddle
       if (!trust_region_models(it, x, rec, hooks, out)) return out;
       if (solved && !trust_region_saddle()) return out;
@@ -139,12 +133,7 @@ NewtonOutcome NewtonLoop::minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& 
     }
     const bool moved = tr_ ? trust_region_step(it, x, x_pred, rec, hooks, out)
                            : line_search_step(it, gn, x, x_pred, rec, hooks, out);
-    if (!moved) {
-      const bool rejected = out.reason == StopReason::line_search_failed || out.reason == StopReason::trust_region_failed;
-      if (rejected && gn <= floor_factor_failed * out.floor)
-        out.reason = StopReason::rounding_floor;
-      return out;
-    }
+    if (!moved) return out;
     rec.time = clock.seconds();
   }
 }
@@ -154,16 +143,19 @@ bool NewtonLoop::line_search_step(int it, double gradient, Eigen::Matrix3Xd& x, 
   const double h2 = h_ * h_;
   if (!direction(it, out.gradient0 > 0 ? gradient / out.gradient0 : 0, x, rec, hooks, out)) return false;
   if (hooks.phase) hooks.phase("the line search on E");
-  const double slope = particle_dot(prob_, g_, dx_) / h2;
-  const EnergySearch s = search_.search({x, dx_, g_, energy_}, x_pred, trial_);
+  const double rounding = energy_rounding(prob_, state_, x, x_pred, h_, energy_);
+  const EnergySearch s = search_.search({x, dx_, g_, energy_, rounding}, x_pred, trial_);
   rec.trials = s.trials;
   if (!s.accepted) {
-    out.reason = StopReason::line_search_failed;
+    out.reason = StopCriterion::failed_search(gradient, out.floor);
     return false;
   }
-  // The quadratic model's decrease along the (inexact) Newton step, −(t·s + t²/2·ΔxᵀKΔx) with
-  // ΔxᵀKΔx ≈ −s: for the projection strategy trust_region.
-  strategy_.after_step(energy_ - s.energy, -slope * s.t * (1 - s.t / 2));
+  // The quadratic model the step solved, at the step s = x(t) − x taken: its decrease
+  // −(gᵀs + ½sᵀKs)/h², K the (projected) Hessian of the last solve — exact or not.
+  step_taken_ = trial_.x - x;
+  rec.actual = energy_ - s.energy;
+  rec.predicted = -(particle_dot(prob_, g_, step_taken_) + 0.5 * step_.curvature(step_taken_)) / h2;
+  strategy_.after_step(rec.actual, rec.predicted);
   rec.length = s.t;
   accept_trial(x, s.energy);
   return true;

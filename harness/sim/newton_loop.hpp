@@ -1,6 +1,6 @@
 // The one Newton loop on E (docs/newton.md): what `step = newton` runs for each substep and what
 // `--reference` runs to make its solution. Its parts, each in a file named after it:
-//   stop_reason.hpp          why it stopped (one enum)
+//   stop_reason.hpp          why it stopped (one enum), the stop criterion, the success predicate
 //   hessian_projection.hpp   which element Hessians enter K projected, and what to try when a solve fails
 //   energy_line_search.hpp   the line search on E (robust Armijo), along the projected path
 //   plane_bounds.hpp         contact: the ground planes as bounds (projected Newton)
@@ -29,10 +29,9 @@
 namespace xb {
 
 struct NewtonSettings {
-  double rtol = 1e-8, atol = 0;   // on ‖∇E‖ (relative to its value at the start; absolute, N)
-  int max_iterations = 100;
-  std::string projection = "adaptive";  // xpbd.hessian_projection
-  double exact_below = 1e-2;            // xpbd.exact_hessian_below
+  StopCriterion stop;  // on ‖∇E‖ (rtol: relative to its value at the start; atol in N)
+  ProjectionStrategyKind projection = ProjectionStrategyKind::adaptive;  // xpbd.hessian_projection
+  double exact_below = 1e-2;                                              // xpbd.exact_hessian_below
   LineSearchKind line_search = LineSearchKind::robust_armijo;
   Globalization globalization = Globalization::line_search;            // xpbd.globalization
   TrustRegionSubproblem subproblem = TrustRegionSubproblem::steihaug;  // xpbd.trust_region_subproblem
@@ -41,10 +40,6 @@ struct NewtonSettings {
   std::function<std::unique_ptr<LinearSolver>()> make_direct;
   static NewtonSettings from(const Params& p);
 };
-
-// ‖∇E‖ at or below this multiple of its rounding floor ends the solve as rounding_floor; a line
-// search that fails below `floor_factor_failed` times it does too (what is left is noise).
-constexpr double floor_factor = 1, floor_factor_failed = 1e2;
 
 // The step that led to an iterate (all zero at iteration 0). What the records call linear_*,
 // fill_time, step_time, step_length, line_search_trials, exact_hessian, projected_elements.
@@ -60,6 +55,8 @@ struct StepRecord {
   bool exact = false;    // some element Hessian entered unprojected
   int indefinite = 0;    // elements with a negative eigenvalue
   int projected = 0;     // of them, those projected
+  double actual = 0;     // the step's decrease of E
+  double predicted = 0;  // the decrease its quadratic model predicted (ρ = actual/predicted)
   std::string action;    // the solver's setup action
   // The trust region (xpbd.globalization = trust_region; 0 under the line search):
   double radius = 0;             // Δ of the accepted step
@@ -81,7 +78,7 @@ struct NewtonIterate {
   double gradient, gradient0;     // ‖∇E‖ of the free gradient, now and at iteration 0
   double floor;                   // its rounding floor (newton.hpp)
   double energy;
-  int active;                     // particles held on a plane
+  int active;                     // particles on a plane in the active set (the stop test's)
   int inverted;                   // tets with det F < 0 (ElementHessians::inverted_tets)
   double twist_sum;               // the smallest σ₂ + σ₃ among them (+inf where none)
   const StepRecord& last;
@@ -153,9 +150,9 @@ class NewtonLoop {
   ConstraintState state_;
   Eigen::VectorXd lambda_, dlambda_;
   Vector b_;
-  Eigen::Matrix3Xd g_, free_g_, dx_;
+  Eigen::Matrix3Xd g_, free_g_, dx_, step_taken_;
   double energy_ = 0;
-  std::vector<int> active_;
+  std::vector<int> active_, held_;  // the active set (stop test), the ε-active set (the step's held y)
   LineSearchTrial trial_;
   bool first_setup_ = true;
   std::unique_ptr<TrustRegionState, TrustRegionDelete> tr_;  // xpbd.globalization = trust_region

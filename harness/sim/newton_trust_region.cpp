@@ -11,7 +11,6 @@
 #include "../../solvers/krylov/steihaug.hpp"
 
 #include <cmath>
-#include <limits>
 #include <optional>
 
 namespace xb {
@@ -127,15 +126,15 @@ bool NewtonLoop::trust_region_models(int it, const Eigen::Matrix3Xd& x, StepReco
   const bool steihaug = s_.subproblem == TrustRegionSubproblem::steihaug;
   const auto& free = tr.exact.free_particles();
   const long nb = static_cast<long>(free.size());
-  tr.held.clear();  // contact: the active bounds' y held (K's row 3i + 1 of free particle i)
-  if (!active_.empty()) {
+  tr.held.clear();  // contact: the ε-active bounds' y held (K's row 3i + 1 of free particle i)
+  if (!held_.empty()) {
     std::vector<int> block(prob_.particles.size(), -1);
     for (long i = 0; i < nb; ++i) block[free[i]] = static_cast<int>(i);
-    for (int q : active_)
+    for (int q : held_)
       if (block[q] >= 0) tr.held.push_back(3 * block[q] + 1);
   }
   ElementProjection proj{Projection::clamp, 0};
-  const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &active_, true};
+  const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &held_, true};
   tr.P = nullptr;
   tr.Kc = nullptr;
   if (steihaug) {  // the run's linear method on the clamped K: Steihaug–Toint's preconditioner
@@ -203,6 +202,7 @@ bool NewtonLoop::trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Mat
   const double tol = hooks.tolerance ? rec.tolerance : step_.solver().tolerance();
   const double h2 = h_ * h_;
   if (hooks.phase) hooks.phase("the trust region's subproblem and trial");
+  const double rounding = 2 * energy_rounding(prob_, state_, x, x_pred, h_, energy_);  // of E(x + p) − E(x)
   for (;;) {
     SubproblemStep sp;
     if (!tr.solve(s_, tol, sp, rec, out.message)) {
@@ -221,7 +221,7 @@ bool NewtonLoop::trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Mat
     double actual = energy_ - e;
     eliminate_multipliers(trial_.state, alpha_tilde_, trial_.lambda);
     primal_residual_vector(prob_, ds_, trial_.state, trial_.x, x_pred, trial_.lambda, trial_.g);
-    if (std::abs(actual) <= energy_rounding_factor * std::numeric_limits<double>::epsilon() * std::abs(energy_)) {
+    if (std::abs(actual) <= rounding) {
       const Eigen::Matrix3Xd s = trial_.x - x;  // E's change below its rounding: the trapezoid rule
       actual = -0.5 * (particle_dot(prob_, g_, s) + particle_dot(prob_, trial_.g, s)) / h2;
     }
@@ -233,6 +233,8 @@ bool NewtonLoop::trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Mat
       rec.boundary = sp.boundary;
       rec.negative_curvature = sp.negative_curvature;
       rec.shift = sp.shift;
+      rec.actual = actual;
+      rec.predicted = predicted;
       rec.length = 1;
       tr.radius = next;
       accept_trial(x, e);
@@ -241,7 +243,7 @@ bool NewtonLoop::trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Mat
     ++rec.rejected;
     tr.radius = next;
     if (!(tr.radius >= trust_region_min_radius * tr.first_radius)) {
-      out.reason = StopReason::trust_region_failed;
+      out.reason = StopCriterion::failed_region(out.gradient, out.floor);
       out.message = "the trust region's radius fell below 1e-12 of its first value with every step rejected";
       return false;
     }

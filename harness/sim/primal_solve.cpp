@@ -52,16 +52,20 @@ double PrimalSolve::dual_relative(const Vector& r_K) {
   return bnorm_ > 0 ? norm2(work_) / bnorm_ : norm2(work_);
 }
 
+void PrimalSolve::fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const TopLeftBlock& top) {
+  if (top.fill)
+    top.fill(sys_);
+  else
+    sys_.fill(grad, alpha_tilde);
+}
+
 void PrimalSolve::setup(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& x,
                         SetupKind kind, SetupContext ctx, const TopLeftBlock& top) {
   Timer t;
   grad_ = &grad;
   alpha_tilde_ = &alpha_tilde;
   top_ = top;
-  if (top.fill)
-    top.fill(sys_);
-  else
-    sys_.fill(grad, alpha_tilde);
+  fill(grad, alpha_tilde, top);
   fill_time_ = t.seconds();
   const Eigen::MatrixXd B = sys_.rigid_modes(x);
   ctx.block_size = 3;

@@ -35,6 +35,8 @@ class PrimalSolve {
   // `top`: M̃ in K's top-left block (copied; its inv_mass must outlive the solves).
   void setup(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const Eigen::Matrix3Xd& x, SetupKind kind,
              SetupContext ctx, const TopLeftBlock& top = {});
+  // setup()'s fill of K alone (the solver is not set up; a solve() after it needs a setup()).
+  void fill(const Gradients& grad, const Eigen::VectorXd& alpha_tilde, const TopLeftBlock& top = {});
   // Δλ for A Δλ = b. Statistics in dual terms: iterations summed over refinement rounds,
   // final_relative_residual = ‖b − AΔλ‖₂/‖b‖₂ (through −J M⁻¹ r_K), setup_time that of setup().
   // With g (the primal residual, one 3-block per free particle: xpbd.primal_residual = keep) the

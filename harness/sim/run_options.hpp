@@ -33,10 +33,17 @@ struct IterationProgress {
 };
 
 struct RunOptions {
-  double time_budget = 0;  // s, 0 = none; a run past it ends with status timeout
+  double time_budget = 0;  // s, 0 = none; a run past it ends with status over_budget
   // Solve every substep also by the reference method (harness/sim/reference.hpp) and log the
   // position error per outer iteration. Its time is excluded from wall_time and time_budget.
   bool reference = false;
+  // With reference: read each substep's reference from this file where it holds one of the same
+  // problem and x̃, else compute it and add it there (harness/sim/reference_store.hpp); "" = none.
+  std::string reference_file;
+  // Bytes the process's resident set may reach; past it, checked before every outer iteration,
+  // the run ends with status out_of_memory (0 = none). `run --memory-limit` also caps the data
+  // segment there, so that an allocation past it fails inside the run (out_of_memory too).
+  double memory_limit = 0;
   // Called with the system of every global outer iteration before it is solved; returning true
   // ends the run (used by `capture`).
   std::function<bool(const SystemView&)> on_system;

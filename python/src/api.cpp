@@ -56,7 +56,8 @@ class ScopedSolvers {
 const std::map<std::string, int (*)(const CommandArgs&)>& command_table() {
   static const std::map<std::string, int (*)(const CommandArgs&)> t = {
       {"run", cmd_run},       {"capture", cmd_capture}, {"solve", cmd_solve},
-      {"report", cmd_report}, {"sweep", cmd_sweep},     {"pack", cmd_pack}};
+      {"report", cmd_report}, {"sweep", cmd_sweep},     {"pack", cmd_pack},
+      {"repair", cmd_repair}};
   return t;
 }
 
@@ -114,11 +115,27 @@ nb::list read(const std::string& path) {
   return l;
 }
 
+nb::dict repair(const std::string& path) {
+  RepairReport rep;
+  {
+    nb::gil_scoped_release release;
+    rep = repair_results(path);
+  }
+  nb::dict d;
+  d["runs"] = rep.runs;
+  d["packed"] = rep.packed;
+  d["relinked"] = rep.found.relinked;
+  d["dangling"] = rep.found.dangling;
+  d["removed"] = rep.found.removed;
+  d["notes"] = rep.found.notes;
+  return d;
+}
+
 }  // namespace
 
 void bind_api(nb::module_& m) {
   m.def("command", &command, nb::arg("name"), nb::arg("args"), nb::arg("solvers"),
-        "Runs an xpbd-bench command (run, capture, solve, report, sweep, pack) with CLI arguments; the protocol objects "
+        "Runs an xpbd-bench command (run, capture, solve, report, sweep, pack, repair) with CLI arguments; the protocol objects "
         "in `solvers` are the methods py:<name> meanwhile. Returns the exit code; bad input raises xpbd_bench.Error.");
   m.def("protocol_name", &protocol_name, nb::arg("solver"),
         "py:<name> for an object of the solver protocol; raises Error naming what it lacks.");
@@ -128,6 +145,8 @@ void bind_api(nb::module_& m) {
   m.def("count_runs", &count_runs, nb::arg("path"),
         "The number of runs in a results file (0 if absent); raises Error for a file that is not one.");
   m.def("read", &read, nb::arg("path"), "Every run of a results file as a dict of its attributes and datasets.");
+  m.def("repair", &repair, nb::arg("path"),
+        "Rebuilds a results file's index from its run files (xpbd-bench repair): a dict of what it found.");
 }
 
 }  // namespace xb::py

@@ -7,6 +7,7 @@
     xb.solve(sys, solvers=["cholmod", MySolver()], form="primal", tol=1e-8, out="s.h5")
     runs = xb.read("r.h5")
     xb.pack("r.h5", "one.h5")                            # every run in one file, to hand on
+    xb.repair("r.h5")                                    # the index rebuilt from the run files
 
 A solver is any object with `name`, `setup(A, info)` and `solve(b, tol)` returning x or
 (x, iterations); it runs inside the C++ stepper as the method py:<name>. run, capture and solve
@@ -50,7 +51,7 @@ else:
     from .amg import AmgHierarchy, amg_hierarchy, export_hierarchy  # noqa: E402
 
 __all__ = ["Error", "WriteError", "System", "scenes", "solvers", "parameters", "run", "capture", "solve", "read",
-           "pack", "load_system", "AmgHierarchy", "amg_hierarchy", "export_hierarchy"]
+           "pack", "repair", "load_system", "AmgHierarchy", "amg_hierarchy", "export_hierarchy"]
 
 
 def solvers():
@@ -185,3 +186,11 @@ def pack(path, out):
     in one self-contained file `out`, to hand to someone. Returns read(out)."""
     _call("pack", [os.fspath(path), "--out", os.fspath(out)], [], True)
     return read(out)
+
+
+def repair(path):
+    """`xpbd-bench repair`: rebuilds the index of the results file `path` (what h5py reads) from its
+    run files (PATH.runs/), adopting a store whose index is gone, moving an older file into a
+    store, removing what no reader needs. Returns what it found: a dict of runs (how many), packed
+    (True: the runs are inline, nothing to do), relinked, dangling, removed and notes (lists)."""
+    return _core.repair(os.fspath(path))

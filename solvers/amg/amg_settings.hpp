@@ -30,7 +30,7 @@ struct AmgOptions {
   // a smoothed P couple neighbours of neighbours, so θ = 0 there (pyamg's) coarsens level 1 by
   // ~80× on squash bunny:270k (22,458 → 288 rows); 0.1 made a 2,832-row level 2 with 929
   // non-zeros per row, whose Galerkin products were half the refresh (operator complexity 2.02
-  // against 1.67), for the same 16 PCG iterations to a dual 1e-1 (docs/amg_scaling.md).
+  // against 1.67), for the same 16 PCG iterations to a dual 1e-1 (docs/mgpbd.md).
   double coarse_nodal_strength_threshold = 0.0;
   // A nodal aggregation with fewer than this many nodes per aggregate coarsens too slowly: a
   // smoothed P then fills the next operator in. On levels ≥ 1 it is first redone at θ = 0 (the
@@ -56,7 +56,7 @@ struct AmgOptions {
   // while a solve needs at most refresh_growth × the PCG iterations per decade of residual of the
   // first solve after the last full refresh. full under XPBD (its K moves too much between outer
   // iterations: coarse_refresh_interval = 2 doubled the PCG count); the newton profile's is
-  // measured in docs/amg_scaling.md.
+  // measured in docs/mgpbd.md.
   std::string refresh = "full";
   double refresh_growth = 1.5;
   // D of the smoothed P: block | scalar. Block (a scalar layout's blocks are its diagonal): the
@@ -81,8 +81,8 @@ struct AmgOptions {
 
 // What amg.smoother = auto, amg.smoother_sweeps = 0 and amg.chebyshev_degree = 0 take on block
 // systems (the primal form): one sweep of a degree-4 Chebyshev in D_block⁻¹A. Per decade of
-// residual it is cheaper than degree 3 × 2 on every captured system (docs/kernels.md, "Smoother
-// cost per digit": four passes before and after instead of six, for 0–30% more iterations);
+// residual it is cheaper than degree 3 × 2 on every captured system (scripts/smoother_table.py,
+// docs/mgpbd.md: four passes before and after instead of six, for 0–30% more iterations);
 // degree 3 × 1 is cheaper still but leaves the stretched bar above a fifth of dual jacobi-pcg's
 // iterations. Block Gauss–Seidel costs about twice as much per decade there.
 inline constexpr const char* kBlockSmoother = "block_chebyshev";

@@ -1,5 +1,5 @@
-// amg.refresh: what a values-only setup of mgpbd does between rebuilds (docs/amg_scaling.md, "The
-// refresh under Newton"). full refreshes every level (A_l by the cached Galerkin products, the
+// amg.refresh: what a values-only setup of mgpbd does between rebuilds (docs/mgpbd.md, "Lazy setup
+// and the refresh"). full refreshes every level (A_l by the cached Galerkin products, the
 // smoothers, the coarse factor); fine refreshes level 0's smoother alone and keeps the coarse
 // levels as they were (a lagged coarse correction: still an SPD preconditioner); keep does no
 // work at all (the V-cycle of the last refreshed values preconditions CG on the new matrix).

@@ -4,7 +4,7 @@
 // constraint gradient is zero at the corners whose barycentric gradient is orthogonal to the
 // stretch, and 3/4 of K's off-diagonal blocks are below 1e-14 of their diagonals. Kept, such
 // blocks count as couplings at θ = 0: aggregates grow across the bar's lines of real coupling,
-// the smoothed P spreads over them and the Galerkin operators fill in (docs/primal_form.md).
+// the smoothed P spreads over them and the Galerkin operators fill in (docs/mgpbd.md).
 //
 // A block (I, J), I ≠ J, with ‖A_IJ‖_F < tol·sqrt(‖A_II‖_F ‖A_JJ‖_F) is dropped and ‖A_IJ‖_F is
 // added to every diagonal entry of node I. For a symmetric A the pair (I, J), (J, I) is dropped

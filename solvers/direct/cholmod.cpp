@@ -12,10 +12,12 @@
 #include "../timer.hpp"
 
 #include "../../core/error.hpp"
+#include "../../core/process_memory.hpp"
 #include "../solver_settings.hpp"
 
 #include <cholmod.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -65,6 +67,7 @@ class CholmodSolver final : public LinearSolver {
       Timer ta;
       L_ = cholmod_analyze(&view_, &c_);
       analyse_time_ += ta.seconds();
+      check_factor_fits();
       factorise("analyse+factorise");
     } else if (lagged_ && factor_ok_ && ctx.frame == factor_frame_) {
       fresh_ = false;  // keep the factor of an earlier matrix
@@ -120,12 +123,24 @@ class CholmodSolver final : public LinearSolver {
   std::string last_setup_action() const override { return action_; }
 
  private:
+  // The symbolic analysis knows nnz(L) before the numeric factorisation allocates it: where the
+  // process has a memory limit (`run --memory-limit`) that the factor would pass, the run ends as
+  // out of memory now, not after CHOLMOD has tried.
+  void check_factor_fits() const {
+    const long long limit = data_limit_bytes();
+    if (!L_ || limit < 0) return;
+    const double need = c_.lnz * (sizeof(double) + sizeof(int)) + static_cast<double>(std::max(0LL, data_bytes()));
+    if (need > static_cast<double>(limit))
+      throw OutOfMemory("CHOLMOD's factor would not fit the memory limit of " + gigabytes(static_cast<double>(limit)) +
+                        ": its " + std::to_string(static_cast<long long>(c_.lnz)) + " non-zeros (symbolic analysis) and the " +
+                        "process's data segment need " + gigabytes(need));
+  }
+
   void factorise(const char* action) {
     Timer t;
     factor_ok_ = L_ && cholmod_factorize(&view_, L_, &c_) && c_.status == CHOLMOD_OK;
-    if (c_.status == CHOLMOD_OUT_OF_MEMORY)
-      message_ = out_of_memory();
-    else if (!L_)
+    if (c_.status == CHOLMOD_OUT_OF_MEMORY) throw OutOfMemory(out_of_memory());  // the run's status: out_of_memory
+    if (!L_)
       message_ = "CHOLMOD analysis failed";
     else if (c_.status == CHOLMOD_NOT_POSDEF)
       message_ = "matrix not positive definite (CHOLMOD failed at column " + std::to_string(L_->minor) + ")";
@@ -146,7 +161,8 @@ class CholmodSolver final : public LinearSolver {
            " non-zeros (about " + mb + " MB)";
   }
 
-  // x = L⁻ᵀL⁻¹ b with the current factor; false if CHOLMOD failed.
+  // x = L⁻ᵀL⁻¹ b with the current factor; false if CHOLMOD failed; OutOfMemory (the run's status
+  // out_of_memory) where it ran out of memory.
   bool apply_factor(const Vector& b, Vector& x) {
     cholmod_dense bd{};
     bd.nrow = b.size();
@@ -157,6 +173,9 @@ class CholmodSolver final : public LinearSolver {
     bd.xtype = CHOLMOD_REAL;
     bd.dtype = CHOLMOD_DOUBLE;
     cholmod_dense* xd = cholmod_solve(CHOLMOD_A, L_, &bd, &c_);
+    if (!xd && c_.status == CHOLMOD_OUT_OF_MEMORY)
+      throw OutOfMemory("out of memory in CHOLMOD's solve with a factor of " +
+                        std::to_string(static_cast<long long>(c_.lnz)) + " non-zeros");
     if (!xd) return false;
     x.resize(b.size());
     std::copy(static_cast<double*>(xd->x), static_cast<double*>(xd->x) + b.size(), x.data());
@@ -196,12 +215,12 @@ class CholmodSolver final : public LinearSolver {
     return st;
   }
 
-  // CHOLMOD's solve failed inside the preconditioner (out of memory): caught in solve_lagged.
+  // CHOLMOD's solve failed inside the preconditioner: caught in solve_lagged.
   struct SolveFailed {};
 
   // CG preconditioned by the factor; with an old factor at most lagged_max_iterations, then a
   // new factor and CG again on what is left (b − Ax), judged against the original b. A failed
-  // factorisation or CHOLMOD solve ends it as a breakdown.
+  // CHOLMOD solve ends it as a breakdown; running out of memory in either, as OutOfMemory.
   LinearStats solve_lagged(const Vector& b, Vector& x) {
     Timer t;
     LinearStats st;
@@ -209,7 +228,7 @@ class CholmodSolver final : public LinearSolver {
       st = lagged_cg(b, x, t);
     } catch (const SolveFailed&) {
       st.status = LinearStatus::breakdown;
-      st.message = "CHOLMOD solve failed (out of memory?)";
+      st.message = "CHOLMOD solve failed";
       x = Vector::Zero(b.size());
     }
     st.solve_time = t.seconds();

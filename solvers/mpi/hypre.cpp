@@ -16,7 +16,7 @@
 // setup or amg.setup_interval frames have passed ("reuse-hierarchy").
 // Block systems (the primal K, block_size 3): BoomerAMG's systems AMG with num_functions = 3
 // (hypre's default dof map i mod 3 is our node-major order; row blocks split at multiples of 3).
-// Measured on K of cloth_hang r64/r128 and bar_hang r8/r12 (docs/external_solvers.md):
+// Measured on K of cloth_hang r64/r128 and bar_hang r8/r12 (the choice: docs/linear_methods.md):
 //  - coarsening per function (SetNodal 0) needed the fewest iterations (cloth128: 19 per solve
 //    against 21-23 for nodal norms 1, 2, 4, 6) and the lowest operator complexity on the bar
 //    (1.14 against 1.74); nodal coarsening is therefore off (the "nodal" option, 0).

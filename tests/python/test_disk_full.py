@@ -51,8 +51,8 @@ def snapshot(path):
     if not os.path.exists(path):
         return None
     files = {"index": read(path)}
-    if os.path.isdir(path + ".runs"):
-        files.update({f: read(os.path.join(path + ".runs", f)) for f in os.listdir(path + ".runs") if f != "lock"})
+    for d, _, names in os.walk(path + ".runs"):  # the runs folder and its store
+        files.update({f: read(os.path.join(d, f)) for f in names if f != "lock"})
     return files
 
 

@@ -38,9 +38,8 @@ def snapshot(path):
     if not os.path.exists(path):
         return None
     files = {"index": read(path)}
-    folder = path + ".runs"
-    if os.path.isdir(folder):
-        files.update({f: read(os.path.join(folder, f)) for f in os.listdir(folder) if f != "lock"})
+    for d, _, names in os.walk(path + ".runs"):  # the runs folder and its store
+        files.update({f: read(os.path.join(d, f)) for f in names if f != "lock"})
     return files
 
 

@@ -74,8 +74,10 @@ TEST(Report, NewtonShowsItsEnergyGradientAndXpbdItsDualResidual) {
   // The same quantity by another path: the relative Newton residual √(‖g‖² + ‖h‖²)/‖g(x̃)‖, h ≈ 0.
   EXPECT_NEAR(attr_double(newton, "final_relative_newton_residual"), relative, 1e-6 * relative + 1e-15);
 
-  // Both have a reference: its verdict and the position error, as recorded.
+  // Both have a reference: its verdict, its certificate and the position error, as recorded.
   EXPECT_EQ(n.at("reference"), "converged");
+  EXPECT_EQ(n.at("certificate"), "error <= " + text3(attr_double(newton, "reference_error_estimate")) + ", trusted to " +
+                                     text3(attr_double(newton, "reference_certified_threshold")));
   EXPECT_EQ(n.at("final_position_error"), text3(attr_double(newton, "final_position_error")));
   EXPECT_EQ(x.at("final_position_error"), text3(attr_double(xpbd, "final_position_error")));
 }
@@ -102,6 +104,7 @@ TEST(Report, UnconvergedReferenceAndOldNewtonFiles) {
   unconverged.attrs["reference_substeps_unconverged"] = 2LL;
   unconverged.attrs["substeps_total"] = 3LL;
   unconverged.attrs["final_position_error"] = 0.5;
+  unconverged.attrs["reference_substeps_uncertified"] = 1LL;
   RunRecord old = run("old");
   old.attrs["step"] = std::string("newton");
   old.attrs["final_relative_newton_residual"] = 3e-9;
@@ -111,6 +114,7 @@ TEST(Report, UnconvergedReferenceAndOldNewtonFiles) {
   EXPECT_EQ(rows.at("0001_unconverged").at("measure"), "|grad E|");
   EXPECT_EQ(rows.at("0001_unconverged").at("relative"), "7.9e-08");
   EXPECT_EQ(rows.at("0001_unconverged").at("reference"), "2 of 3 substeps unconverged");
+  EXPECT_EQ(rows.at("0001_unconverged").at("certificate"), "uncertified in 1 of 3 substeps");
   EXPECT_EQ(rows.at("0002_old").at("measure"), "~|grad E|");
   EXPECT_EQ(rows.at("0002_old").at("relative"), "3e-09");
   EXPECT_EQ(rows.at("0002_old").at("reference"), "-");

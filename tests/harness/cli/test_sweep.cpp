@@ -246,7 +246,7 @@ TEST(SweepCli, BadSpecWritesNothingAndExitsNonZero) {
 TEST(SweepCli, SigkillDuringSecondRunThenResume) {
   const auto d = temp_dir("kill");
   // Each run lasts its time budget (no tolerance can be met), so the second run is surely in
-  // progress right after its start line; a timeout is a recorded status like any other.
+  // progress right after its start line; a run over its budget is a recorded status like any other.
   const std::string spec = write(d / "theta.toml", "scene = \"bar_hang\"\nsolvers = [\"" + theta_solver() +
                                                        "\"]\nframes = 1\ntime_budget = 1.5\n[set]\nthreads = 1\n"
                                                        "max_iterations = 100000000\nrtol = 0\natol = 0\n[grid]\n"
@@ -268,7 +268,7 @@ TEST(SweepCli, SigkillDuringSecondRunThenResume) {
   const std::string first_created = attr_string(runs[0], "created");
   const std::string first_key = attr_string(runs[0], "sweep_key");
   EXPECT_EQ(attr_string(runs[0], "sweep_point"), "amg.strength_threshold=0");
-  EXPECT_EQ(attr_string(runs[0], "status"), "timeout");
+  EXPECT_EQ(attr_string(runs[0], "status"), "over_budget");
 
   Child again = spawn({"sweep", spec, "--out", out});
   ASSERT_EQ(finish(again), 0) << again.text;

@@ -133,17 +133,18 @@ TEST(AtomicFile, TextWritersStopAtTheFirstFailedWrite) {
 }
 
 namespace {
-// A results file as the user sees it: the index and every file in its runs folder (by name).
+// A results file as the user sees it: the index and every file in its runs folder and store (by name).
 std::map<std::string, std::string> results_bytes(const std::string& path) {
   std::map<std::string, std::string> files{{"index", bytes_of(path)}};
-  for (const auto& e : fs::directory_iterator(runs_folder(path)))
-    if (e.path().filename() != "lock") files[e.path().filename().string()] = bytes_of(e.path().string());
+  for (const auto& e : fs::recursive_directory_iterator(runs_folder(path)))
+    if (e.is_regular_file() && e.path().filename() != "lock") files[e.path().filename().string()] = bytes_of(e.path().string());
   return files;
 }
 }  // namespace
 
-// An append writes the run's file (chunks, flush, rename 1) and then the new index (chunks, flush,
-// rename 2): a fault at any of them leaves the index and the runs folder as they were.
+// An append writes the run's file (chunks, flush, its link into the store: rename 1) and then the
+// new index (chunks, flush, rename 2): a fault at any of them leaves the index and the runs folder
+// as they were.
 TEST(AtomicFile, ResultsFileFailsAtFirstMiddleLastWriteFlushAndRename) {
   TempDir d;
   const std::string out = d / "r.h5";
@@ -155,7 +156,7 @@ TEST(AtomicFile, ResultsFileFailsAtFirstMiddleLastWriteFlushAndRename) {
   const RunRecord added = run_named("added", 8000);  // 64 KB of doubles: several chunks
   append_runs(probe, {added});
   long run_calls = 0;
-  for (const auto& e : fs::directory_iterator(runs_folder(probe)))
+  for (const auto& e : fs::recursive_directory_iterator(runs_folder(probe)))
     if (e.path().filename().string().starts_with("0002_added.")) run_calls = calls_for(fs::file_size(e.path()));
   const long index_calls = calls_for(fs::file_size(probe));
   ASSERT_GE(run_calls, 5);

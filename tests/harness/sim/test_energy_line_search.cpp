@@ -35,6 +35,12 @@ struct Spring {
     x.col(1) = r * Eigen::Vector3d(1, 2, 2) / 3;
     return x;
   }
+  // E's rounding at x (newton.hpp).
+  double rounding(const Eigen::Matrix3Xd& x, double E) const {
+    ConstraintState s;
+    evaluate_constraints(prob, x, s);
+    return energy_rounding(prob, s, x, x_pred, h, E);
+  }
   // E and h²∇E at x.
   double energy(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& g) const {
     ConstraintState s;
@@ -69,7 +75,7 @@ TEST(EnergyLineSearch, SufficientDecreaseRefusesAnOvershootThatLowersE) {
   for (const LineSearchKind kind : {LineSearchKind::armijo, LineSearchKind::robust_armijo}) {
     const EnergyLineSearch search(c.prob, ds, c.at, c.h, kind);
     LineSearchTrial trial;
-    const EnergySearch s = search.search({x, dx, g, E}, c.x_pred, trial);
+    const EnergySearch s = search.search({x, dx, g, E, c.rounding(x, E)}, c.x_pred, trial);
     ASSERT_TRUE(s.accepted);
     EXPECT_EQ(s.t, 0.5);  // the quadratic's decrease at t = 1/2: a/2(1 − a/4)s, sufficient
     EXPECT_EQ(s.trials, 2);
@@ -79,7 +85,8 @@ TEST(EnergyLineSearch, SufficientDecreaseRefusesAnOvershootThatLowersE) {
 }
 
 // Next to the minimiser a Newton step lowers E by ~1e-15, below E's own rounding (E ≈ 2e3, one ulp
-// 4.5e-13): the computed E cannot see it. With E(x) taken 8 ulps low (as a computed E may be), no
+// 4.5e-13; energy_rounding ≈ 9 ulps: the inertia's terms are computed from coordinates of ~1 and
+// differ by ~0.4): the computed E cannot see it. With E(x) taken 8 ulps low (as a computed E may be), no
 // trial can pass Armijo's test, so plain Armijo fails; the trapezoid rule on the gradients, exact
 // for this quadratic, takes the full step onto the minimiser (robust_armijo).
 TEST(EnergyLineSearch, RobustArmijoDescendsBelowTheRoundingOfE) {
@@ -95,7 +102,10 @@ TEST(EnergyLineSearch, RobustArmijoDescendsBelowTheRoundingOfE) {
   LineSearchTrial trial;
   const EnergySearch plain = EnergyLineSearch(c.prob, ds, c.at, c.h, LineSearchKind::armijo).search({x, dx, g, E}, c.x_pred, trial);
   EXPECT_FALSE(plain.accepted);
-  const EnergySearch s = EnergyLineSearch(c.prob, ds, c.at, c.h, LineSearchKind::robust_armijo).search({x, dx, g, E}, c.x_pred, trial);
+  const double rounding = c.rounding(x, E);
+  ASSERT_GT(2 * rounding, 8 * (E - std::nextafter(E, 0.0)));
+  const EnergySearch s =
+      EnergyLineSearch(c.prob, ds, c.at, c.h, LineSearchKind::robust_armijo).search({x, dx, g, E, rounding}, c.x_pred, trial);
   ASSERT_TRUE(s.accepted);
   EXPECT_EQ(s.t, 1.0);
   EXPECT_TRUE(s.on_gradient);

@@ -128,7 +128,7 @@ TEST(NewtonLoop, ReferenceMatchesAnIndependentDenseNewton) {
   const Eigen::Matrix3Xd x_pred = prob.particles.x + h * prob.particles.v;
   ReferenceSolver ref(prob, p, at);
   const ReferenceSolution rs = ref.solve(x_pred);
-  ASSERT_EQ(rs.status, "converged");
+  ASSERT_EQ(rs.status, StopReason::converged);
   // The dense Newton on the free dofs.
   std::vector<int> dofs;
   for (int k = 0; k < 3 * prob.particles.size(); ++k)
@@ -181,7 +181,7 @@ TEST(NewtonLoop, ContactReferenceMeetsTheOptimalityConditions) {
   x_pred.row(1).array() -= x_pred.row(1).minCoeff() + 0.01;
   ReferenceSolver ref(prob, p, at);
   const ReferenceSolution rs = ref.solve(x_pred);
-  ASSERT_TRUE(rs.status == "converged" || rs.status == "rounding_floor") << rs.status;
+  ASSERT_TRUE(stop_reason_success(rs.status)) << stop_reason_name(rs.status);
   Eigen::Matrix3Xd start = x_pred;
   start.row(1) = start.row(1).cwiseMax(0.0);
   const Eigen::VectorXd g0 = gradient(prob, start, x_pred, at);
@@ -210,8 +210,10 @@ TEST(NewtonLoop, ContactReferenceMeetsTheOptimalityConditions) {
 }
 
 // A run to the rounding floor: with rtol = atol = 0 only the floor can end a substep, and that is
-// a success (status ok, substep_status rounding_floor), not a failed line search.
-TEST(NewtonLoop, TheRoundingFloorIsSuccess) {
+// a success (status ok, substep_status rounding_floor, substep_success 1), not a failed line search.
+// On the mass chain's second substep plain Armijo blocks before it, within 1e2 of it: that is
+// line_search_at_floor, its own reason and no success (the run's status line_search_failed says so).
+TEST(NewtonLoop, TheRoundingFloorIsSuccessAndAFailedSearchNearItIsNot) {
   Params p = newton_params("twist_bar");
   p.resolution = 2;
   p.stiffness = 7e9;
@@ -222,20 +224,35 @@ TEST(NewtonLoop, TheRoundingFloorIsSuccess) {
   ASSERT_EQ(r.status, "ok") << r.message;
   ASSERT_EQ(r.log.substep_status.size(), 1u);
   EXPECT_EQ(r.log.substep_status[0], "rounding_floor");
+  EXPECT_EQ(r.log.substep_success[0], 1);
   EXPECT_LT(r.log.iteration.back(), 40);
   EXPECT_LE(r.log.relative_newton_residual.back(), r.log.relative_gradient_floor.back());
   EXPECT_EQ(r.stats.at("substeps_rounding_floor"), 1);
-  // The same with plain Armijo, which blocks there: still the floor, below 1e2 of its estimate.
-  p.line_search = "armijo";
-  const RunResult a = run_simulation(build_problem(p), p, "cholmod");
-  ASSERT_EQ(a.status, "ok") << a.message;
-  EXPECT_EQ(a.log.substep_status[0], "rounding_floor");
+  Params c = newton_params("mass_chain");
+  c.frames = 2;
+  c.rtol = 0;
+  c.atol = 0;
+  c.max_iterations = 60;
+  c.line_search = "armijo";
+  const RunResult a = run_simulation(build_problem(c), c, "cholmod");
+  ASSERT_EQ(a.log.substep_status.size(), 2u);
+  EXPECT_EQ(a.log.substep_status[1], "line_search_at_floor");
+  EXPECT_EQ(a.log.substep_success[1], 0);
+  EXPECT_GT(a.log.relative_newton_residual.back(), a.log.relative_gradient_floor.back());
+  EXPECT_LE(a.log.relative_newton_residual.back(), 1e2 * a.log.relative_gradient_floor.back());
+  EXPECT_EQ(a.status, "line_search_failed");
+  EXPECT_NE(a.message.find("line_search_at_floor"), std::string::npos) << a.message;
 }
 
 // Every projection strategy converges on the small squash (the default ball), E never rising by
-// more than its rounding, and the reference's status is read into the run's.
+// more than its rounding, and the reference's status is read into the run's. Each strategy is
+// itself: every one but clamp takes another path than clamp's (a strategy that fell back to the
+// clamp everywhere fails here; rho_switch is the clamp wherever every step's ρ ≥ 1/4, as here:
+// tests/harness/sim/test_newton_parts.cpp tests its switch), and the exact strategies leave some
+// step exact.
 TEST(NewtonLoop, EveryStrategyConvergesOnTheSquash) {
-  for (const std::string strategy : hessian_projection_choices()) {
+  std::vector<double> clamp_energy;
+  for (const std::string& strategy : hessian_projection_choices()) {
     Params p = newton_params("squash");
     p.hessian_projection = strategy;
     p.max_iterations = 60;
@@ -246,8 +263,23 @@ TEST(NewtonLoop, EveryStrategyConvergesOnTheSquash) {
     for (size_t k = 0; k + 1 < r.log.energy.size(); ++k)
       EXPECT_LE(r.log.energy[k + 1], r.log.energy[k] * (1 + 1e-12)) << strategy << " " << k;
     ASSERT_EQ(r.log.reference_status.size(), 1u);
-    EXPECT_TRUE(r.log.reference_status[0] == "converged" || r.log.reference_status[0] == "rounding_floor");
+    EXPECT_EQ(r.log.reference_success[0], 1);
+    EXPECT_EQ(r.log.reference_certified[0], 1) << r.log.reference_certificate_note[0];
     EXPECT_LT(r.log.position_error.back(), 1e-4) << strategy;
+    if (strategy == "clamp" || strategy == "rho_switch") {
+      if (strategy == "clamp") clamp_energy = r.log.energy;
+      continue;
+    }
+    ASSERT_FALSE(clamp_energy.empty()) << "clamp is the first choice";
+    bool differs = r.log.energy.size() != clamp_energy.size();
+    for (size_t k = 0; !differs && k < clamp_energy.size(); ++k)
+      differs = std::abs(r.log.energy[k] - clamp_energy[k]) > 1e-12 * std::abs(clamp_energy[k]);
+    EXPECT_TRUE(differs) << strategy << " took the clamp's path";
+    if (strategy == "adaptive" || strategy == "on_demand" || strategy == "progressive") {
+      long long exact = 0;
+      for (long long e : r.log.exact_hessian) exact += e;
+      EXPECT_GT(exact, 0) << strategy;
+    }
   }
 }
 
@@ -267,6 +299,8 @@ TEST(NewtonLoop, AnUnconvergedReferenceIsTheRunsStatus) {
   EXPECT_EQ(r.status, "reference_unconverged");
   EXPECT_NE(r.message.find("the reference did not converge in 1 of 1 substeps"), std::string::npos) << r.message;
   EXPECT_NE(r.log.reference_status[0], "converged");
+  EXPECT_EQ(r.log.reference_success[0], 0);
+  EXPECT_EQ(r.log.reference_certified[0], 0);  // an XPBD fixed point has no certificate
   ASSERT_EQ(r.log.reference_time.size(), 1u);
   EXPECT_GT(r.log.reference_time[0], 0);
   EXPECT_LE(r.log.reference_time[0], r.reference_time);
@@ -279,7 +313,7 @@ TEST(ProjectionStrategy, ProgressiveTauFollowsTheModelAndTheFailures) {
   Params p = newton_params("twist_bar");
   p.resolution = 2;
   const Problem prob = build_problem(p);
-  ProjectionStrategy s(prob, "progressive", 1e-2);
+  ProjectionStrategy s(prob, ProjectionStrategyKind::progressive, 1e-2);
   s.begin_substep();
   auto tau = [&](int it) { return s.first(it, 1).tolerance; };
   EXPECT_EQ(tau(0), 1);

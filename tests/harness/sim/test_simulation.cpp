@@ -125,7 +125,7 @@ TEST(LinearSolvers, CholmodReportsSingularAsBreakdown) {
   EXPECT_NE(r.message.find("positive definite"), std::string::npos) << r.message;
 }
 
-// Out of memory in a run is its status `error` saying "out of memory" and in which step, never a
+// Out of memory in a run is its status `out_of_memory` saying so and in which step, never a
 // std::bad_alloc. In a child process whose address space is capped a little above what it has
 // mapped, one thread (no OpenMP thread to start), the run's first large allocations fail.
 TEST(Simulation, OutOfMemoryIsAnErrorSayingWhere) {
@@ -149,7 +149,7 @@ TEST(Simulation, OutOfMemoryIsAnErrorSayingWhere) {
     if (::setrlimit(RLIMIT_AS, &cap) != 0) ::_exit(3);
     const RunResult r = run_simulation(prob, p, "mgpbd");
     std::fprintf(stderr, "status %s: %s\n", r.status.c_str(), r.message.c_str());
-    ::_exit(r.status == "error" && r.message.rfind("out of memory in ", 0) == 0 ? 0 : 1);
+    ::_exit(r.status == "out_of_memory" && r.message.rfind("out of memory in ", 0) == 0 ? 0 : 1);
   }
   int st = 0;
   ASSERT_EQ(::waitpid(pid, &st, 0), pid);

@@ -6,14 +6,19 @@ that say when, how fast or on how many threads a run ran (EXCLUDED, each with it
 
 The set: every in-house method (xpbd-jacobi, xpbd-authors, xpbd-gs, cg, jacobi-pcg, mgpbd) on a
 tet scene (squash) and on the cloth, the global ones in both forms; mgpbd with the float and the
-double V-cycle over two frames (setups and refreshes); a Newton run with --reference; a captured
-system solved in both forms. Sizes are chosen so that every vector spans several of
-core/reduce.hpp's chunks of 4096 indices and every parallel loop runs on all threads (above
+double V-cycle over two frames (setups and refreshes); a Newton run with --reference; vbd (plain
+and Chebyshev) and avbd (on the squash with --reference, the cloth, and the ball in contact with
+the ground); a captured system solved in both forms. Sizes are chosen so that every vector spans
+several of core/reduce.hpp's chunks of 1,024 indices and every parallel loop runs on all threads (above
 kMinParallelRows = 2048).
 
 usage: python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench [--threads 1,2,3,4]
+           [--data FILE.json]
+--data: the comparison per case as stamped data (plots/pages.py), which `python3 plots/pages.py
+publish FILE.json` makes the results page `determinism` (docs/results/).
 """
 import argparse
+import io
 import os
 import subprocess
 import sys
@@ -21,6 +26,10 @@ import tempfile
 
 import h5py
 import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(ROOT, "plots"))
+import pages  # noqa: E402
 
 # The keys left out of the comparison, each with why it may differ between two runs of the same
 # problem and settings; every other attribute and dataset must be the same bits.
@@ -43,6 +52,7 @@ EXCLUDED = {
     "created": "the UTC date and time of the run",
     # the machine's state and the thread count, which is what the test varies
     "load_average": "the 1-minute load at the process's start",
+    "peak_memory": "bytes, the process's largest resident set: each thread has its own stack and arena",
     "omp_threads": "OpenMP's thread count: what the test varies",
 }
 
@@ -66,6 +76,12 @@ CASES = [
     # the Newton step, with the reference solution of the time step beside it
     ("newton", [*RUN, *SQUASH, "--frames", "1", "--profile", "newton", "--solver", "mgpbd", "--form", "primal",
                 "--reference"]),
+    # block descent on E (vbd: plain and Chebyshev; avbd: its multipliers and ramp) with the reference
+    ("vbd", [*RUN, *SQUASH, "--frames", "2", "--solver", "vbd,avbd", "--reference", "--set", "max_iterations=4"]),
+    ("vbd_cloth", [*RUN, "--frames", "1", "--scene", "cloth_hang", "--set", "resolution=63", "--solver", "vbd",
+                   "--set", "vbd.acceleration=chebyshev"]),
+    # avbd's ground (per-particle multipliers) in contact: ball_drop from frame 9 on
+    ("avbd_ground", [*RUN, "--frames", "11", "--scene", "ball_drop", "--set", "resolution=12", "--solver", "avbd"]),
     # the linear level: one captured system solved to 1e-6 (xpbd_bench.solve takes this path too)
     ("solve", ["solve", "--system", "{sys}", "--solver", "cg,jacobi-pcg,mgpbd", "--form", "dual,primal",
                "--tol", "1e-6", "--quiet"]),
@@ -101,6 +117,11 @@ def same_bits(a, b):
     return bool(np.all(a == b))
 
 
+def keys_compared(records_):
+    """The attributes and datasets compared, summed over a file's runs."""
+    return sum(sum(1 for k in rec if not excluded(k.lstrip("@"))) for rec in records_.values())
+
+
 def compare(ref, other, label):
     """Every difference between two files' records, one line each."""
     diffs = []
@@ -120,7 +141,13 @@ def main():
     ap.add_argument("--binary", required=True)
     ap.add_argument("--threads", default="1,2,3,4")
     ap.add_argument("--only", default="", help="comma-separated case names")
+    ap.add_argument("--data", default="", help="write the comparison as stamped data for plots/pages.py")
     args = ap.parse_args()
+    stamp = pages.stamp("python3 tests/harness/sim/test_thread_determinism.py --binary build/xpbd-bench --threads "
+                        f"{args.threads} --data {args.data}", microbench=os.path.join(os.path.dirname(args.binary), "xb_microbench")) \
+        if args.data else None
+    table = pages.Table(["case", "command", "runs", "attributes and datasets compared", "thread counts",
+                         "differing runs"], out=io.StringIO())
     threads = [int(t) for t in args.threads.split(",")]
     only = set(filter(None, args.only.split(",")))
     failures, compared = [], 0
@@ -146,11 +173,19 @@ def main():
                 files[t] = records(out)
             if len(files) < len(threads):
                 continue
-            base = files[threads[0]]
+            base, before = files[threads[0]], len(failures)
             for t in threads[1:]:
                 failures += compare(base, files[t], f"{name}, {threads[0]} vs {t} threads")
             compared += len(base)
+            table.row([name, "`xpbd-bench " + " ".join(command).replace(system + ".h5", "SYSTEM.h5") + "`", len(base),
+                       keys_compared(base), ",".join(map(str, threads)), len(failures) - before])
             print(f"{name}: {len(base)} runs at {threads} threads compared", flush=True)
+    if args.data:
+        pages.write_data(args.data, "determinism", "The same bits for any thread count", "Every record at each thread count",
+                         stamp, [table.data()], "Each case's runs at every thread count, one process each, compared "
+                         "attribute by attribute and dataset by dataset, bit for bit, leaving out the clocks, dates, "
+                         "the load and the thread count (EXCLUDED in the command's script). " +
+                         (f"{len(failures)} difference(s)." if failures else "No record differed."))
     for f in failures:
         print("FAIL:", f)
     if failures:

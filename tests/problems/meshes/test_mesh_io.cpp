@@ -238,13 +238,15 @@ TEST(RealMeshes, NamedMeshSyntax) {
   const char* old_dir = std::getenv("XB_MESH_DIR");
   const std::string saved = old_dir ? old_dir : "";
   setenv("XB_MESH_DIR", dir.c_str(), 1);
-  for (const char* base : {"bunny_850k", "elephant_270k", "armadillo_5k"}) {
+  for (const char* base : {"bunny_850k", "elephant_270k", "armadillo_5k", "bunny_1600k", "femur_270k"}) {
     std::ofstream(dir / (std::string(base) + ".node")) << "0 3 0 0\n";
     std::ofstream(dir / (std::string(base) + ".ele")) << "0 4 0\n";
   }
   EXPECT_EQ(named_mesh_path("bunny:850k"), (dir / "bunny_850k.ele").string());
   EXPECT_EQ(named_mesh_path("elephant:270k"), (dir / "elephant_270k.ele").string());
   EXPECT_EQ(named_mesh_path("armadillo:5k"), (dir / "armadillo_5k.ele").string());
+  EXPECT_EQ(named_mesh_path("bunny:1600k"), (dir / "bunny_1600k.ele").string());  // the race's largest
+  EXPECT_EQ(named_mesh_path("femur:270k"), (dir / "femur_270k.ele").string());    // its elongated shape
   if (old_dir)
     setenv("XB_MESH_DIR", saved.c_str(), 1);
   else

@@ -1,4 +1,4 @@
-// xb_amg_measure: the measurements behind the AMG reports (docs/primal_form.md), a tool, not a test.
+// xb_amg_measure: the measurements behind the AMG reports (docs/mgpbd.md), a tool, not a test.
 //
 //   xb_amg_measure systems [SYSTEMS] [VARIANTS]
 //     For each system (a scene state built as the primal-form tests build theirs) it solves the

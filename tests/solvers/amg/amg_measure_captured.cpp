@@ -1,5 +1,5 @@
 // xb_amg_measure captured PREFIX.h5 [VARIANTS]: mgpbd's hierarchy on the primal K of a captured
-// system (xpbd-bench capture), level by level — what docs/amg_scaling.md reports.
+// system (xpbd-bench capture), level by level — what docs/mgpbd.md reports.
 //   VARIANTS "amg.key=value,...;..." (amg.* keys as --set takes them; "default" = the defaults).
 // Per variant: levels (rows, nnz, nnz per row), operator complexity, the setup, the values-only
 // refresh (whole, and each level's Galerkin product), one V-cycle (whole, and each level's

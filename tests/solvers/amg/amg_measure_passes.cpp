@@ -1,6 +1,6 @@
 // The bytes each pass of one V-cycle (and of CG's product with K) reads and writes, against the
-// triad's bandwidth measured in the same process: what docs/amg_scaling.md's per-pass table
-// reports. Bytes are the compulsory traffic of each kernel as it runs: values, the index arrays
+// triad's bandwidth measured in the same process: the per-pass finding of docs/kernels.md.
+// Bytes are the compulsory traffic of each kernel as it runs: values, the index arrays
 // it reads (one column node per block, the row pointers per node), the vectors read once, and
 // each vector written counted twice (its write-allocate read, as the triad counts it). Gathers
 // of x beyond one read are not counted, so the floor is a lower bound.
