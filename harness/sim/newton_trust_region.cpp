@@ -126,15 +126,17 @@ bool NewtonLoop::trust_region_models(int it, const Eigen::Matrix3Xd& x, StepReco
   const bool steihaug = s_.subproblem == TrustRegionSubproblem::steihaug;
   const auto& free = tr.exact.free_particles();
   const long nb = static_cast<long>(free.size());
-  tr.held.clear();  // contact: the ε-active bounds' y held (K's row 3i + 1 of free particle i)
-  if (!held_.empty()) {
+  // Contact: the active bounds' y held (K's row 3i + 1 of free particle i). Not the line search's
+  // ε-active set: holding it cost the region more steps on ball_drop and, with mgpbd, a collapse.
+  tr.held.clear();
+  if (!active_.empty()) {
     std::vector<int> block(prob_.particles.size(), -1);
     for (long i = 0; i < nb; ++i) block[free[i]] = static_cast<int>(i);
-    for (int q : held_)
+    for (int q : active_)
       if (block[q] >= 0) tr.held.push_back(3 * block[q] + 1);
   }
   ElementProjection proj{Projection::clamp, 0};
-  const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &held_, true};
+  const GlobalStepInput in{state_, lambda_, x, g_, b_, proj.base, &proj, &active_, true};
   tr.P = nullptr;
   tr.Kc = nullptr;
   if (steihaug) {  // the run's linear method on the clamped K: Steihaug–Toint's preconditioner
