@@ -44,6 +44,11 @@ struct StepperSettings {
   double exact_hessian_below = 1e-2;
   // step = newton's line search on E (harness/sim/energy_line_search.hpp): robust_armijo | armijo.
   std::string line_search = "robust_armijo";
+  // step = newton's globalisation (harness/sim/trust_region.hpp): line_search (the projection
+  // strategy's step, then xpbd.line_search) | trust_region (the exact Hessian's model in a region,
+  // its subproblem solved by trust_region_subproblem: steihaug | more_sorensen).
+  std::string globalization = "line_search";
+  std::string trust_region_subproblem = "steihaug";
   // The reference solution of --reference (harness/sim/reference.hpp): newton (Newton on E, the
   // backward-Euler solution; every α̃ > 0) | xpbd (XPBD's fixed point by CHOLMOD) | auto (newton
   // where every α̃ > 0, else xpbd).
@@ -52,6 +57,10 @@ struct StepperSettings {
   // (iterative, to a tolerance that Eisenstat–Walker tightens to 1e-12: for sizes whose factor does
   // not fit the machine). The reference's stop test on ‖∇E‖ is the same.
   std::string reference_linear = "cholmod";
+  // The newton reference's globalisation and, with trust_region, its subproblem solver (steihaug
+  // preconditioned by reference.linear on the clamped K, or more_sorensen by CHOLMOD).
+  std::string reference_globalization = "line_search";
+  std::string reference_trust_region_subproblem = "steihaug";
 };
 
 const SettingTable<StepperSettings>& stepper_settings();

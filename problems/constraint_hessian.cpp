@@ -167,6 +167,11 @@ Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const
   return modes_in_x(es, B).array().square().matrix() * mu;
 }
 
+Eigen::Matrix<double, 12, 1> tet_mode_displacement(const Eigen::Matrix3d& Q, const Eigen::Matrix<double, 4, 3>& B) {
+  const Eigen::Matrix<double, 3, 4> dX = Q * (B.transpose() * B).inverse() * B.transpose();
+  return Eigen::Map<const Eigen::Matrix<double, 12, 1>>(dX.data());
+}
+
 Matrix9d tet_modes_to_F(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu) {
   Matrix9d H = Matrix9d::Zero();
   for (int k = 0; k < 9; ++k) {

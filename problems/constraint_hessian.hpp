@@ -107,6 +107,12 @@ Eigen::Matrix<double, 12, 1> tet_modes_diagonal(const ArapEigensystem& es, const
 // Σ_k μ_k vec(Q_k) vec(Q_k)ᵀ: the same in F-space.
 Matrix9d tet_modes_to_F(const ArapEigensystem& es, const Eigen::Matrix<double, 9, 1>& mu);
 
+// The smallest displacement of the tet's particles (12, x0..x3) whose change of F is Q:
+// δX = Q(BᵀB)⁻¹Bᵀ, so δX·B = Q and Σ_a δx_a = 0. Along it the curvature of Ψ is Q's own
+// eigenvalue (δxᵀ∇²_xΨ δx = vec(Q)ᵀ∇²_FΨ vec(Q)): a twist mode with ψ < 0 is a direction of
+// negative curvature of the element, in closed form.
+Eigen::Matrix<double, 12, 1> tet_mode_displacement(const Eigen::Matrix3d& Q, const Eigen::Matrix<double, 4, 3>& B);
+
 // ∇²C (12×12, x0..x3) and ∇²_F C (9×9).
 Matrix12d tet_arap_hessian(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, const Eigen::Vector3d& x2,
                            const Eigen::Vector3d& x3, const Eigen::Matrix3d& Dm_inv);

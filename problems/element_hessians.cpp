@@ -3,6 +3,8 @@
 #include "../core/error.hpp"
 #include "constraints.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace xb {
@@ -140,6 +142,46 @@ void ElementHessians::fill_energy_hessian(const Eigen::Matrix3Xd& x, const Eigen
   }
   indefinite_ = indefinite;
   projected_ = projected;
+}
+
+double ElementHessians::lowest_mode(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, int j,
+                                    Eigen::Matrix<double, 12, 1>& dx) const {
+  const int nd = static_cast<int>(prob_.distance.size());
+  dx.setZero();
+  if (j < nd) {  // (I − nnᵀ) has the transverse eigenvalue 2C/(lα̃) along [t, −t], t ⟂ n
+    const auto& e = prob_.distance.idx[j];
+    const Eigen::Vector3d d = x.col(e[0]) - x.col(e[1]);
+    const double l = d.norm();
+    if (!(l > 0)) return 0;
+    const Eigen::Vector3d n = d / l;
+    int k = 0;
+    n.cwiseAbs().minCoeff(&k);
+    const Eigen::Vector3d t = n.cross(Eigen::Vector3d::Unit(k)).normalized();
+    dx.segment<3>(0) = t;
+    dx.segment<3>(3) = -t;
+    return 4 * (l - prob_.distance.rest_length[j]) / (l * alpha_tilde[j]);  // [t, −t]ᵀ[B −B; −B B][t, −t] = 4tᵀBt
+  }
+  const int t = j - nd;
+  if (static_cast<size_t>(t) >= svd_.size()) throw Error("lowest_mode: no evaluate() before it");
+  const auto& e = prob_.tets.idx[t];
+  const Eigen::Matrix3d F = tet_deformation_gradient(x.col(e[0]), x.col(e[1]), x.col(e[2]), x.col(e[3]), prob_.tets.Dm_inv[t]);
+  const ArapEigensystem es = arap_eigensystem(F, svd_[t].U, svd_[t].sigma, svd_[t].V);
+  int k = 0;
+  const double psi = es.psi.minCoeff(&k);
+  dx = tet_mode_displacement(es.mode[k], tet_shape_gradients(prob_.tets.Dm_inv[t]));
+  return psi / alpha_tilde[j];
+}
+
+int ElementHessians::inverted_tets(double& smallest_twist_sum) const {
+  int count = 0;
+  double low = INFINITY;
+  for (const Svd& d : svd_)
+    if (d.sigma[2] < 0) {
+      ++count;
+      low = std::min(low, d.sigma[1] + d.sigma[2]);
+    }
+  smallest_twist_sum = low;
+  return count;
 }
 
 void ElementHessians::geometric_stiffness_diagonal(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& lambda,

@@ -84,6 +84,15 @@ class ElementHessians {
   // After fill_energy_hessian, per constraint: the smallest eigenvalue of its exact (unprojected)
   // H_j in the closed-form eigenbasis (problems/constraint_hessian.hpp); negative: indefinite.
   const std::vector<double>& smallest_eigenvalues() const { return smallest_; }
+  // Constraint j's direction of its exact Hessian's smallest eigenvalue, as a displacement of its
+  // particles (12: 4 slots of 3; a distance fills slots 0–1): a tet's lowest ARAP mode through
+  // tet_mode_displacement (from the SVD of the last evaluate() at x), a distance's transverse
+  // direction. Returns the curvature δxᵀH_jδx (< 0: a direction of negative curvature).
+  double lowest_mode(const Eigen::Matrix3Xd& x, const Eigen::VectorXd& alpha_tilde, int j,
+                     Eigen::Matrix<double, 12, 1>& dx) const;
+  // Of the last evaluate(): tets with det F < 0 and the smallest σ₂ + σ₃ among them (the ARAP
+  // energy's ridge is σ₂ + σ₃ = 0, where its rotation is not differentiable; +inf where none).
+  int inverted_tets(double& smallest_twist_sum) const;
   // Of the last fill: elements with a negative eigenvalue, and those among them it projected.
   int indefinite_elements() const { return indefinite_; }
   int projected_elements() const { return projected_; }

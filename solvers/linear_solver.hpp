@@ -43,6 +43,9 @@ struct SetupContext {
 // ‖J M⁻¹ r_K‖₂ / ‖b_dual‖₂, so both forms stop on one criterion.
 using RelativeResidual = std::function<double(const Vector& r)>;
 
+// z = P⁻¹r: a preconditioner's action (P symmetric positive definite for CG to be correct).
+using Preconditioner = std::function<void(const Vector& r, Vector& z)>;
+
 enum class LinearStatus {
   converged,       // ‖b − Ax‖₂ ≤ tol·‖b‖₂
   max_iterations,  // stopped at linear.max_iterations without reaching tol
@@ -88,6 +91,12 @@ class LinearSolver {
     (void)rel;
     return false;
   }
+
+  // The preconditioner of the last setup, z ≈ A⁻¹r with its P SPD where A is, for a Krylov loop
+  // outside the solver (the trust region's Steihaug–Toint CG, harness/sim/newton_trust_region.cpp):
+  // jacobi-pcg's inverse diagonal, mgpbd's V-cycle, exact cholmod's factor solve. Null where the
+  // solver has none (cg: P = I) or its setup failed. Valid until the next setup().
+  virtual Preconditioner preconditioner() { return nullptr; }
 
   // Scalar statistics of the current setup for the results (e.g. "levels",
   // "operator_complexity", "setup_kind_structure"). Keys are HDF5 attribute names.

@@ -243,6 +243,17 @@ RunRecord make_simulation_record(const std::string& name, const Params& p, const
     r.datasets["relative_gradient_floor"] = L.relative_gradient_floor;
     r.datasets["active_bounds"] = L.active_bounds;
     r.datasets["hessian_time"] = L.hessian_time;
+    r.datasets["inverted_elements"] = L.inverted_elements;
+    r.datasets["smallest_twist_sum"] = L.smallest_twist_sum;
+  }
+  if (!L.trust_region_radius.empty()) {  // xpbd.globalization = trust_region
+    r.datasets["trust_region_radius"] = L.trust_region_radius;
+    r.datasets["trust_region_ratio"] = L.trust_region_ratio;
+    r.datasets["trust_region_shift"] = L.trust_region_shift;
+    r.datasets["trust_region_curvature"] = L.trust_region_curvature;
+    r.datasets["trust_region_boundary"] = L.trust_region_boundary;
+    r.datasets["trust_region_negative_curvature"] = L.trust_region_negative_curvature;
+    r.datasets["trust_region_rejections"] = L.trust_region_rejections;
   }
   if (!L.reference_status.empty()) add_reference_records(r, res);
   std::vector<double> pos(res.final_positions.data(), res.final_positions.data() + res.final_positions.size());

@@ -49,6 +49,16 @@ struct IterationLog {
   std::vector<double> relative_gradient_floor;
   std::vector<long long> active_bounds;
   std::vector<double> hessian_time;  // s of that step filling the element Hessians (all its tries)
+  // step = newton only, per entry: the tets with det F < 0 and the smallest σ₂ + σ₃ among them (the
+  // ARAP energy's ridge is σ₂ + σ₃ = 0; +inf where no tet is inverted).
+  std::vector<long long> inverted_elements;
+  std::vector<double> smallest_twist_sum;
+  // xpbd.globalization = trust_region only, of the step that led here (harness/sim/trust_region.hpp;
+  // 0 at iteration 0): its radius, ρ, more_sorensen's σ, the smallest Rayleigh quotient of an element
+  // mode in the exact K (< 0: K indefinite), whether it ended on the boundary or along negative
+  // curvature, and the steps rejected before it.
+  std::vector<double> trust_region_radius, trust_region_ratio, trust_region_shift, trust_region_curvature;
+  std::vector<long long> trust_region_boundary, trust_region_negative_curvature, trust_region_rejections;
   std::vector<long long> linear_iterations;
   std::vector<double> linear_setup_time, linear_solve_time, linear_relative_residual;
   std::vector<double> linear_tolerance;  // the relative tolerance that step was given (linear.forcing)

@@ -46,6 +46,9 @@ const ResultsSchema& results_schema() {
           {"simulation", "int", {"frame", "substep", "iteration", "linear_iterations", "linear_history/offset", "reference/iterations", "line_search_trials", "exact_hessian", "projected_elements", "active_bounds", "substep_success", "reference/success", "reference/certified"}},
           {"simulation", "float", {"dual_residual", "relative_dual_residual", "authors_dual_residual", "authors_relative_dual_residual", "primal_residual", "newton_residual", "relative_newton_residual", "energy", "wall_time", "step_time", "step_length", "fill_time", "linear_setup_time", "linear_solve_time", "linear_relative_residual", "linear_tolerance", "linear_history/residual", "linear_history/time", "position_error", "reference/relative_dual_residual", "reference/relative_energy_gradient", "final_positions", "distance_edges", "distance_rest_length", "inverted_tets", "relative_gradient_floor", "hessian_time", "reference/time", "reference/energy_gradient", "reference/gradient_floor", "reference/error_scale", "reference/error_estimate", "reference/contraction", "reference/certified_threshold"}},
           {"simulation", "string", {"linear_setup_action", "reference/status", "reference/source", "substep_status", "reference/certificate_note"}},
+          // step = newton's inversions and the trust region's steps (harness/sim/trust_region.hpp).
+          {"simulation", "int", {"inverted_elements", "trust_region_boundary", "trust_region_negative_curvature", "trust_region_rejections"}},
+          {"simulation", "float", {"smallest_twist_sum", "trust_region_radius", "trust_region_ratio", "trust_region_shift", "trust_region_curvature"}},
           {"linear", "float", {"residual", "time", "solution"}},
       }),
   };

@@ -97,6 +97,26 @@ LinearStats GlobalStep::solve(const GlobalStepInput& in, SetupKind kind, SetupCo
       ds_.apply_minv_gradT(in.state, dlambda, dx);
     return st;
   }
+  setup_primal(in, kind, ctx);
+  const std::vector<int>& free = primal_->system().free_particles();
+  const long nb = static_cast<long>(free.size());
+  to_dofs(in.g, g_dof_);
+  const LinearStats st = primal_->solve(in.b, dlambda, keep_ ? &g_dof_ : nullptr, &dx_dof_);
+  dx.setZero(3, prob_.particles.size());
+  if (dx_dof_.size() == 3 * nb) {
+    for (int d : held_dofs_) dx_dof_[d] = 0;  // exactly: Jᵀα̃⁻¹b (≈ 0 under newton) is not zeroed
+    for (long i = 0; i < nb; ++i) dx.col(free[i]) = dx_dof_.segment<3>(3 * i);
+  }
+  return st;
+}
+
+void GlobalStep::setup(const GlobalStepInput& in, SetupKind kind, SetupContext ctx) {
+  if (!primal_ || !newton_ || stiffness_ != "full")
+    throw Error("GlobalStep::setup: only step = newton's primal form is set up without a solve");
+  setup_primal(in, kind, ctx);
+}
+
+void GlobalStep::setup_primal(const GlobalStepInput& in, SetupKind kind, SetupContext ctx) {
   const std::vector<int>& free = primal_->system().free_particles();
   const long nb = static_cast<long>(free.size());
   top_ = TopLeftBlock{};
@@ -112,14 +132,6 @@ LinearStats GlobalStep::solve(const GlobalStepInput& in, SetupKind kind, SetupCo
     top_.fill = [this, &grad](PrimalSystem& sys) { sys.fill_with_blocks(grad, alpha_tilde_, elements_->blocks()); };
   }
   primal_->setup(in.state.grad, alpha_tilde_, in.x, kind, ctx, top_);
-  to_dofs(in.g, g_dof_);
-  const LinearStats st = primal_->solve(in.b, dlambda, keep_ ? &g_dof_ : nullptr, &dx_dof_);
-  dx.setZero(3, prob_.particles.size());
-  if (dx_dof_.size() == 3 * nb) {
-    for (int d : held_dofs_) dx_dof_[d] = 0;  // exactly: Jᵀα̃⁻¹b (≈ 0 under newton) is not zeroed
-    for (long i = 0; i < nb; ++i) dx.col(free[i]) = dx_dof_.segment<3>(3 * i);
-  }
-  return st;
 }
 
 void GlobalStep::newton_top(const GlobalStepInput& in) {

@@ -57,6 +57,11 @@ class GlobalStep {
   // Sets the solver up on the prepared system and solves; Δλ and Δx (per particle, 0 at pins).
   LinearStats solve(const GlobalStepInput& in, SetupKind kind, SetupContext ctx, Vector& dlambda,
                     Eigen::Matrix3Xd& dx);
+  // step = newton: fills K from the prepared element blocks (holding in.held's y) and sets the
+  // solver up on it, without a solve (the trust region's preconditioner). Throws xb::Error otherwise.
+  void setup(const GlobalStepInput& in, SetupKind kind, SetupContext ctx);
+  // K's rows the last step = newton setup held (contact's active bounds).
+  const std::vector<int>& held_dofs() const { return held_dofs_; }
   // Seconds filling K in the last primal setup.
   double primal_fill_time() const { return primal_ ? primal_->fill_time() : 0; }
   // step = newton: sᵀKs for a step s per particle, K the last one filled (held dofs' s ignored):
@@ -72,6 +77,7 @@ class GlobalStep {
 
  private:
   void dual_step(const GlobalStepInput& in, const Vector& dlambda, Eigen::Matrix3Xd& dx);
+  void setup_primal(const GlobalStepInput& in, SetupKind kind, SetupContext ctx);
   // step = newton: held_dofs_ from in.held and top_ filling M + Σπ(H_j) with them held.
   void newton_top(const GlobalStepInput& in);
   // The free dofs' values of per-particle v (held dofs 0).

@@ -5,6 +5,7 @@
 //   energy_line_search.hpp   the line search on E (robust Armijo), along the projected path
 //   plane_bounds.hpp         contact: the ground planes as bounds (projected Newton)
 //   newton.hpp               h²∇E, the elimination of λ, the rounding floor of ‖∇E‖
+//   trust_region.hpp         the trust region in place of the line search (newton_trust_region.cpp)
 // One iteration: evaluate (reused from the line search's accepted trial) → stop test → direction
 // (K Δx = −h²∇E with the strategy's projection; the descent safeguard: a try that breaks down, is
 // not finite or is not a descent direction, ∇E·Δx ≥ 0, is solved again more projected) → line
@@ -16,10 +17,12 @@
 #include "hessian_projection.hpp"
 #include "plane_bounds.hpp"
 #include "stop_reason.hpp"
+#include "trust_region.hpp"
 
 #include "../params.hpp"
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -30,6 +33,11 @@ struct NewtonSettings {
   ProjectionStrategyKind projection = ProjectionStrategyKind::adaptive;  // xpbd.hessian_projection
   double exact_below = 1e-2;                                              // xpbd.exact_hessian_below
   LineSearchKind line_search = LineSearchKind::robust_armijo;
+  Globalization globalization = Globalization::line_search;            // xpbd.globalization
+  TrustRegionSubproblem subproblem = TrustRegionSubproblem::steihaug;  // xpbd.trust_region_subproblem
+  int linear_max_iterations = 1000;  // Steihaug–Toint's CG (linear.max_iterations)
+  // more_sorensen's direct solver (CHOLMOD with the run's settings, refactorised every setup).
+  std::function<std::unique_ptr<LinearSolver>()> make_direct;
   static NewtonSettings from(const Params& p);
 };
 
@@ -50,6 +58,14 @@ struct StepRecord {
   double actual = 0;     // the step's decrease of E
   double predicted = 0;  // the decrease its quadratic model predicted (ρ = actual/predicted)
   std::string action;    // the solver's setup action
+  // The trust region (xpbd.globalization = trust_region; 0 under the line search):
+  double radius = 0;             // Δ of the accepted step
+  double ratio = 0;              // its ρ = actual/predicted decrease of E
+  bool boundary = false;         // on the region's boundary
+  bool negative_curvature = false;  // along a direction of negative curvature (CG's or an element mode)
+  int rejected = 0;              // steps rejected before it (ρ ≤ η)
+  double shift = 0;              // more_sorensen: σ of K + σK_c
+  double curvature = 0;          // the smallest Rayleigh quotient of an element mode in K (< 0: K indefinite)
 };
 
 // What the loop shows its caller at every evaluation.
@@ -63,6 +79,8 @@ struct NewtonIterate {
   double floor;                   // its rounding floor (newton.hpp)
   double energy;
   int active;                     // particles on a plane in the active set (the stop test's)
+  int inverted;                   // tets with det F < 0 (ElementHessians::inverted_tets)
+  double twist_sum;               // the smallest σ₂ + σ₃ among them (+inf where none)
   const StepRecord& last;
 };
 
@@ -87,8 +105,10 @@ class NewtonLoop {
   // prob, ds, step and alpha_tilde must outlive the loop; `step` is a GlobalStep of step = newton.
   NewtonLoop(const Problem& prob, const DualSystem& ds, GlobalStep& step, const Eigen::VectorXd& alpha_tilde, double h,
              const NewtonSettings& s);
-  // Minimises E from x̃ (projected onto the bounds); x ends at the last iterate.
-  NewtonOutcome minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const NewtonHooks& hooks);
+  // Minimises E from x̃, or from `start` where given (either projected onto the bounds); x ends
+  // at the last iterate.
+  NewtonOutcome minimise(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, const NewtonHooks& hooks,
+                         const Eigen::Matrix3Xd* start = nullptr);
   const ProjectionStrategy& strategy() const { return strategy_; }
 
  private:
@@ -97,6 +117,26 @@ class NewtonLoop {
   // Solves for dx_ (tries until a descent direction or nothing left); false with the reason set.
   bool direction(int it, double relative, const Eigen::Matrix3Xd& x, StepRecord& rec, const NewtonHooks& hooks,
                  NewtonOutcome& out);
+  // One step from x (the direction, then the line search, or the trust region's model, subproblem
+  // and ratio test), x and the loop's state moved to the accepted point; false with out.reason set.
+  bool line_search_step(int it, double gradient, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, StepRecord& rec,
+                        const NewtonHooks& hooks, NewtonOutcome& out);
+  // The trust region's models at x: the exact K, the preconditioner, the modes, the first radius.
+  bool trust_region_models(int it, const Eigen::Matrix3Xd& x, StepRecord& rec, const NewtonHooks& hooks,
+                           NewtonOutcome& out);
+  // A step on the models trust_region_models() made at x.
+  bool trust_region_step(int it, Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred, StepRecord& rec,
+                         const NewtonHooks& hooks, NewtonOutcome& out);
+  // Whether the models found negative curvature in K (an element mode's Rayleigh quotient < 0):
+  // then ‖∇E‖ at its tolerance is a saddle, not a minimiser, and the trust region goes on.
+  bool trust_region_saddle() const;
+  void accept_trial(Eigen::Matrix3Xd& x, double energy);  // x, state, λ, g ← the trial's
+  void make_trust_region();
+  void begin_trust_region();  // a new substep: its first iteration sets the radius
+  struct TrustRegionState;  // newton_trust_region.cpp
+  struct TrustRegionDelete {
+    void operator()(TrustRegionState* t) const;
+  };
 
   const Problem& prob_;
   const DualSystem& ds_;
@@ -115,6 +155,7 @@ class NewtonLoop {
   std::vector<int> active_, held_;  // the active set (stop test), the ε-active set (the step's held y)
   LineSearchTrial trial_;
   bool first_setup_ = true;
+  std::unique_ptr<TrustRegionState, TrustRegionDelete> tr_;  // xpbd.globalization = trust_region
 };
 
 }  // namespace xb

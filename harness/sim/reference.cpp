@@ -27,11 +27,16 @@ std::string reference_description(const Params& p, const Eigen::VectorXd& alpha_
     const std::string linear = p.reference_linear == "cholmod"
                                    ? std::string("cholmod")
                                    : p.reference_linear + " (eisenstat_walker down to 1e-12)";
+    const std::string until = ", the ground planes as bounds (projected Newton), from x~, until |grad E| (free) <= 1e-10 "
+                              "of its value at x~ or at its rounding floor, at most 100 iterations; the iterate with the "
+                              "smallest |grad E| is the reference";
+    if (p.reference_globalization == "trust_region")
+      return "newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's Newton "
+             "loop with a trust region on the exact Hessian (subproblem " + p.reference_trust_region_subproblem + ", " +
+             linear + " on the primal form)" + until;
     return "newton: Newton's method on E(x) (the backward-Euler solution of the substep) by the stepper's Newton "
            "loop, " + linear + " on the primal form with the full geometric stiffness (xpbd.hessian_projection = " +
-           ReferenceSolver::projection + "), robust Armijo backtracking on E, the ground planes as bounds (projected "
-           "Newton), from x~, until |grad E| (free) <= 1e-10 of its value at x~ or at its rounding floor, at most 100 "
-           "iterations; the iterate with the smallest |grad E| is the reference";
+           ReferenceSolver::projection + "), robust Armijo backtracking on E" + until;
   }
   return "xpbd: cholmod (global direct solve of A dlambda = -(C + alpha~ lambda)), omega = 1, from the substep's "
          "predicted state x~ with lambda = 0, recomputed every substep from the run's own state; stops at a dual "
@@ -46,6 +51,16 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
       ds_(prob), newton_params_(p) {
   const MethodInfo* m = find_method("cholmod");
   if (!m || !m->available) throw Error("reference: the direct solver 'cholmod' is not available");
+  const bool region = p.reference_globalization == "trust_region";
+  if (!region && p.reference_trust_region_subproblem != StepperSettings{}.reference_trust_region_subproblem)
+    throw Error("reference.trust_region_subproblem=" + p.reference_trust_region_subproblem +
+                " needs reference.globalization=trust_region");
+  if (region && p.reference_trust_region_subproblem == "more_sorensen" && p.reference_linear != "cholmod")
+    throw Error("reference.trust_region_subproblem=more_sorensen factorises K + sigma K_c by CHOLMOD: it needs "
+                "reference.linear=cholmod (with '" + p.reference_linear + "' use steihaug, preconditioned by it)");
+  if (method_ == "xpbd" && region)
+    throw Error("reference.globalization=trust_region needs reference.method=newton (XPBD's fixed point has no energy to "
+                "globalise)");
   if (method_ == "xpbd") {
     direct_ = make_linear_solver("cholmod", p);
     return;
@@ -64,11 +79,16 @@ ReferenceSolver::ReferenceSolver(const Problem& prob, const Params& p, const Eig
     forcing_.emplace(q.linear);
   }
   newton_.emplace(prob_, ds_, q.reference_linear, q, alpha_tilde_);
-  NewtonSettings s;
+  NewtonSettings s = NewtonSettings::from(q);  // the trust region's CG limit and direct solver
+  s.stop = StopCriterion{};
   s.stop.rtol = settings.target_relative;
   s.stop.atol = 0;
   s.stop.max_iterations = settings.max_iterations;
   s.projection = parse_projection_strategy(projection);
+  s.exact_below = StepperSettings{}.exact_hessian_below;
+  s.line_search = LineSearchKind::robust_armijo;
+  s.globalization = parse_globalization(p.reference_globalization, "reference.globalization");
+  s.subproblem = parse_trust_region_subproblem(p.reference_trust_region_subproblem, "reference.trust_region_subproblem");
   loop_.emplace(prob_, ds_, *newton_, alpha_tilde_, h_, s);
   certificate_.emplace(prob_, ds_, *newton_, alpha_tilde_, h_);
 }

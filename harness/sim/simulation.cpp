@@ -58,6 +58,8 @@ void Simulation::check_combination(const std::string& method) const {
     if (p_.primal_residual != "zero") refuse("xpbd.primal_residual=" + p_.primal_residual);
     if (p_.hessian_projection != "clamp") refuse("xpbd.hessian_projection=" + p_.hessian_projection + " (vbd.projection is VBD's)");
     if (p_.residual_metric != "true") refuse("residual_metric=" + p_.residual_metric + " (it stops on |grad E|)");
+    if (p_.globalization != "line_search") refuse("xpbd.globalization=" + p_.globalization);
+    if (p_.trust_region_subproblem != "steihaug") refuse("xpbd.trust_region_subproblem=" + p_.trust_region_subproblem);
     return;
   }
   const bool local = find_method(method)->local;
@@ -79,11 +81,28 @@ void Simulation::check_combination(const std::string& method) const {
   if (p_.hessian_projection != "clamp" && p_.hessian_projection != "abs" && !newton_)
     throw Error("xpbd.hessian_projection=" + p_.hessian_projection +
                 " needs step=newton (a strategy of Newton on E; XPBD's full geometric stiffness takes clamp or abs)");
+  check_globalization(method);
   if (newton_)
     for (long j = 0; j < alpha_tilde_.size(); ++j)
       if (!(alpha_tilde_[j] > 0))
         throw Error("step=newton needs every constraint compliant (alpha~ > 0): E(x) has no term for constraint " +
                     std::to_string(j) + " of compliance 0 (use step=fixed)");
+}
+
+// The trust region's keys (harness/sim/trust_region.hpp) where they apply, and only there.
+void Simulation::check_globalization(const std::string& method) const {
+  const bool region = p_.globalization == "trust_region";
+  if (region && !newton_)
+    throw Error("xpbd.globalization=trust_region needs step=newton (a globalisation of Newton on E); --profile newton sets it");
+  if (!region && p_.trust_region_subproblem != "steihaug")
+    throw Error("xpbd.trust_region_subproblem=" + p_.trust_region_subproblem +
+                " needs xpbd.globalization=trust_region (the line search solves no subproblem)");
+  if (region && p_.trust_region_subproblem == "more_sorensen" && method != "cholmod")
+    throw Error("xpbd.trust_region_subproblem=more_sorensen factorises K + sigma K_c by CHOLMOD: it needs --solver cholmod "
+                "(with '" + method + "' use xpbd.trust_region_subproblem=steihaug, preconditioned by it)");
+  if (region && p_.line_search != "robust_armijo")
+    throw Error("xpbd.line_search=" + p_.line_search + " has no effect under xpbd.globalization=trust_region (the ratio of "
+                "actual to predicted decrease judges each step)");
 }
 
 RunResult Simulation::run() {
@@ -250,6 +269,8 @@ void Simulation::end_substep(StopReason reason) {
     case StopReason::rounding_floor: ++ends_.rounding_floor; break;
     case StopReason::line_search_at_floor: ++ends_.search_at_floor; [[fallthrough]];
     case StopReason::line_search_failed: ++ends_.search_failures; break;
+    case StopReason::trust_region_at_floor: ++ends_.region_at_floor; [[fallthrough]];
+    case StopReason::trust_region_failed: ++ends_.region_failures; break;
     default: ++ends_.max_iterations;
   }
 }
@@ -262,6 +283,13 @@ void Simulation::finish() {
                    "above its rounding floor" +
                    (ends_.search_at_floor > 0 ? "; " + std::to_string(ends_.search_at_floor) + " of them within 1e2 of it: line_search_at_floor"
                                          : std::string()) + ")";
+  } else if (res_.status == "ok" && ends_.region_failures > 0) {
+    res_.status = "trust_region_failed";
+    res_.message = std::to_string(ends_.region_failures) + " of " + std::to_string(res_.substeps_total) +
+                   " substeps ended with the trust region collapsed (every step rejected until its radius fell below "
+                   "1e-12 of its first, with |grad E| above its rounding floor" +
+                   (ends_.region_at_floor > 0 ? "; " + std::to_string(ends_.region_at_floor) + " of them within 1e2 of it: trust_region_at_floor"
+                                              : std::string()) + ")";
   } else if (res_.status == "ok" && ends_.max_iterations > 0) {
     res_.status = "max_iterations";
     res_.message = std::to_string(ends_.max_iterations) + " of " + std::to_string(res_.substeps_total) +

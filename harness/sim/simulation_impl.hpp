@@ -59,6 +59,7 @@ class Simulation {
   Residuals log_state(int frame, int sub, int it, const LastStep& last);
   void log_entry(int frame, int sub, int it, const Entry& e, const LastStep& last);
   void log_linear(const LastStep& last, int it);
+  void log_trust_region(const LastStep& s);  // xpbd.globalization = trust_region's entries
   // λ += Δλ, x += (ω or the line search's t)·Δx by Params::step; returns the step length.
   double apply_global_step(LastStep& last);
   // The substep's reference and its certificate into the log (the reference/ group).
@@ -69,6 +70,7 @@ class Simulation {
   StepEnd step(int frame, int sub, int it, double residual, LastStep& last);
   LinearStats global_solve(int frame, int sub, int it, LastStep& last);
   void check_combination(const std::string& method) const;
+  void check_globalization(const std::string& method) const;
   void fail(const std::string& status, const std::string& msg) {
     res_.status = status;
     res_.message = msg;
@@ -133,6 +135,8 @@ class Simulation {
     int max_iterations = 0;
     int search_failures = 0;  // substeps ended by a failed line search on E
     int search_at_floor = 0;  // of them, those within 1e2 of the rounding floor (line_search_at_floor)
+    int region_failures = 0;  // substeps ended by a collapsed trust region
+    int region_at_floor = 0;  // of them, those within 1e2 of the rounding floor (trust_region_at_floor)
     int rounding_floor = 0;   // substeps ended at the rounding floor of ‖∇E‖
   } ends_;
   StabilityMonitor stability_;

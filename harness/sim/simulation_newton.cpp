@@ -30,6 +30,9 @@ void Simulation::newton_substep(int frame, int sub) {
     res_.log.relative_gradient_floor.push_back(v.gradient0 > 0 ? v.floor / v.gradient0 : 0);
     res_.log.hessian_time.push_back(v.last.hessians);
     res_.log.active_bounds.push_back(v.active);
+    res_.log.inverted_elements.push_back(v.inverted);
+    res_.log.smallest_twist_sum.push_back(v.twist_sum);
+    if (p_.globalization == "trust_region") log_trust_region(v.iteration == 0 ? LastStep{} : v.last);
     if (v.iteration > 0) ++res_.outer_iterations;
     if (opt_.on_iteration)
       opt_.on_iteration({frame, where_.first_frame, p_.frames, sub, p_.substeps, v.iteration, p_.max_iterations,
@@ -57,6 +60,17 @@ void Simulation::newton_substep(int frame, int sub) {
     case StopReason::interrupted: break;  // the budget or capture already said why
     default: end_substep(o.reason);
   }
+}
+
+void Simulation::log_trust_region(const LastStep& s) {
+  IterationLog& L = res_.log;
+  L.trust_region_radius.push_back(s.radius);
+  L.trust_region_ratio.push_back(s.ratio);
+  L.trust_region_shift.push_back(s.shift);
+  L.trust_region_curvature.push_back(s.curvature);
+  L.trust_region_boundary.push_back(s.boundary ? 1 : 0);
+  L.trust_region_negative_curvature.push_back(s.negative_curvature ? 1 : 0);
+  L.trust_region_rejections.push_back(s.rejected);
 }
 
 void Simulation::reference_verdict() {

@@ -12,8 +12,10 @@ std::string stop_reason_name(StopReason r) {
     case StopReason::converged: return "converged";
     case StopReason::rounding_floor: return "rounding_floor";
     case StopReason::line_search_at_floor: return "line_search_at_floor";
+    case StopReason::trust_region_at_floor: return "trust_region_at_floor";
     case StopReason::max_iterations: return "max_iterations";
     case StopReason::line_search_failed: return "line_search_failed";
+    case StopReason::trust_region_failed: return "trust_region_failed";
     case StopReason::stagnated: return "stagnated";
     case StopReason::solver_failed: return "solver_failed";
     case StopReason::not_finite: return "not_finite";

@@ -15,8 +15,10 @@ enum class StopReason {
   converged,             // the measure ≤ rtol of its first value, or ≤ atol
   rounding_floor,        // ‖∇E‖ within its own rounding error (newton.hpp: gradient_rounding_floor)
   line_search_at_floor,  // no step passed the line search, ‖∇E‖ within floor_factor_failed of its floor
+  trust_region_at_floor, // the trust region collapsed (every step rejected), ‖∇E‖ within floor_factor_failed of its floor
   max_iterations,        // the iteration limit, above all of these
   line_search_failed,    // no step passed the line search, ‖∇E‖ farther above its floor
+  trust_region_failed,   // the trust region collapsed, ‖∇E‖ farther above its floor
   stagnated,             // the measure stopped improving (the xpbd reference: no 1% gain in 5 iterations)
   solver_failed,         // the linear solve broke down (on the most projected Hessian too, under Newton)
   not_finite,            // a non-finite position, energy or measure
@@ -40,7 +42,7 @@ struct StopCriterion {
   int max_iterations = 100;
   static constexpr double divergence_factor = 1e8;    // r over this multiple of r0 (and over atol): diverged
   static constexpr double floor_factor = 1;           // r at or below this multiple of its rounding floor: rounding_floor
-  static constexpr double floor_factor_failed = 1e2;  // a failed line search below this multiple: line_search_at_floor
+  static constexpr double floor_factor_failed = 1e2;  // a failed search below this multiple: *_at_floor
 
   bool diverged(double r, double r0) const { return r > divergence_factor * r0 && r > atol; }
   bool converged(double r, double r0) const { return r <= rtol * r0 || r <= atol; }
@@ -49,6 +51,11 @@ struct StopCriterion {
   // After a failed line search at measure r: line_search_at_floor or line_search_failed.
   static StopReason failed_search(double r, double floor) {
     return r <= floor_factor_failed * floor ? StopReason::line_search_at_floor : StopReason::line_search_failed;
+  }
+  // After the trust region collapsed at measure r, by the same floor: trust_region_at_floor or
+  // trust_region_failed.
+  static StopReason failed_region(double r, double floor) {
+    return r <= floor_factor_failed * floor ? StopReason::trust_region_at_floor : StopReason::trust_region_failed;
   }
 };
 

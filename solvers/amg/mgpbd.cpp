@@ -95,12 +95,17 @@ class MgpbdSolver final : public LinearSolver {
       x = Vector::Zero(b.size());
       return st;
     }
-    Preconditioner M = [this](const Vector& r, Vector& z) { h_.vcycle(r, z); };
-    st = pcg(*A_, b, x, M, tolerance(), maxit_, rel_, natural_);
+    st = pcg(*A_, b, x, preconditioner(), tolerance(), maxit_, rel_, natural_);
     rule_.solved(st.iterations, st.final_relative_residual, st.status != LinearStatus::breakdown);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
+  }
+
+  // One V-cycle (symmetric: it preconditions CG).
+  Preconditioner preconditioner() override {
+    if (!A_ || h_.empty()) return nullptr;
+    return [this](const Vector& r, Vector& z) { h_.vcycle(r, z); };
   }
 
   bool set_relative_residual(RelativeResidual rel) override {

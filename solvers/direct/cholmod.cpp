@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace xb {
 
@@ -94,6 +95,14 @@ class CholmodSolver final : public LinearSolver {
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;
+  }
+
+  // The factor's solve: exactly A⁻¹ of the last factorised matrix (lagged: an earlier one).
+  Preconditioner preconditioner() override {
+    if (!factor_ok_) return nullptr;
+    return [this](const Vector& r, Vector& z) {
+      if (!apply_factor(r, z)) z = Vector::Constant(r.size(), std::numeric_limits<double>::quiet_NaN());
+    };
   }
 
   std::map<std::string, double> statistics() const override {

@@ -31,15 +31,17 @@ class CgSolver final : public LinearSolver {
     return true;
   }
 
-  LinearStats solve(const Vector& b, Vector& x) override {
-    Preconditioner M;
-    if (jacobi_)
-      M = [this](const Vector& r, Vector& z) {
-        z.resize(r.size());
+  Preconditioner preconditioner() override {
+    if (!jacobi_) return nullptr;
+    return [this](const Vector& r, Vector& z) {
+      z.resize(r.size());
 #pragma omp parallel for schedule(static)
-        for (long i = 0; i < r.size(); ++i) z[i] = inv_diag_[i] * r[i];
-      };
-    LinearStats st = pcg(*A_, b, x, M, tolerance(), maxit_, rel_, natural_);
+      for (long i = 0; i < r.size(); ++i) z[i] = inv_diag_[i] * r[i];
+    };
+  }
+
+  LinearStats solve(const Vector& b, Vector& x) override {
+    LinearStats st = pcg(*A_, b, x, preconditioner(), tolerance(), maxit_, rel_, natural_);
     st.setup_time = setup_time_;
     setup_time_ = 0;
     return st;

@@ -8,9 +8,6 @@
 
 namespace xb {
 
-// z = M⁻¹ r; must be symmetric positive definite for CG to be correct.
-using Preconditioner = std::function<void(const Vector& r, Vector& z)>;
-
 // The recurrence residual is checked against tol; on exit the true residual b − Ax is
 // recomputed and reported as final_relative_residual (so a drifted recurrence cannot
 // pass for converged). A null preconditioner means plain CG. `rel` (if set) measures the

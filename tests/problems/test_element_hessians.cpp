@@ -236,3 +236,39 @@ TEST(ElementHessians, EnergyHessianRefusesRigidConstraints) {
   ElementHessians eh(c.prob);
   EXPECT_THROW(eh.fill_energy_hessian(c.prob.particles.x, c.alpha_tilde, Projection::clamp), std::exception);
 }
+
+// lowest_mode: a tet's twist mode (the squash's flat start: σ₃ = 0, ψ = 1 − 2/σ₂ < 0) and a
+// compressed distance's transverse direction are directions of the element's exact Hessian whose
+// curvature δxᵀH_jδx is the element's smallest eigenvalue (ψ_min/α̃ for a tet), and a tet's mode
+// moves no particle's centroid.
+TEST(ElementHessians, LowestModeIsTheElementsNegativeCurvature) {
+  for (const auto& [scene, sets] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {"squash", {}}, {"heavy_rope", {"resolution=6"}}}) {
+    Case c = make_case(scene, sets);
+    if (scene == "heavy_rope") c.prob.particles.x *= 0.7;  // every link compressed
+    const Eigen::Matrix3Xd& x = c.prob.particles.x;
+    ElementHessians eh(c.prob);
+    ConstraintState st;
+    eh.evaluate(x, st);
+    eh.fill_energy_hessian(x, c.alpha_tilde, ElementProjection{Projection::none, 0}, nullptr, true);
+    int checked = 0;
+    for (int j = 0; j < c.prob.num_constraints() && checked < 30; ++j) {
+      if (!(eh.smallest_eigenvalues()[j] < 0)) continue;
+      Eigen::Matrix<double, 12, 1> dx;
+      const double curvature = eh.lowest_mode(x, c.alpha_tilde, j, dx);
+      const int n = 3 * eh.blocks().slots(j);
+      const Eigen::MatrixXd H = eh.blocks().matrix(j);
+      const double exact = dx.head(n).dot(H * dx.head(n));
+      EXPECT_NEAR(curvature, exact, 1e-9 * std::abs(exact)) << scene << " " << j;
+      if (eh.blocks().slots(j) == 4) {
+        EXPECT_NEAR(curvature, eh.smallest_eigenvalues()[j], 1e-9 * std::abs(curvature)) << scene << " " << j;
+        const Eigen::Vector3d shift = dx.segment<3>(0) + dx.segment<3>(3) + dx.segment<3>(6) + dx.segment<3>(9);
+        EXPECT_LT(shift.norm(), 1e-12 * dx.norm());
+      } else {  // 4C/(lα̃) along [t, −t], twice the transverse eigenvalue of [B −B; −B B] per unit ‖t‖
+        EXPECT_NEAR(curvature, 2 * eh.smallest_eigenvalues()[j] * dx.head(n).squaredNorm(), 1e-9 * std::abs(curvature));
+      }
+      ++checked;
+    }
+    EXPECT_GE(checked, 5) << scene;
+  }
+}

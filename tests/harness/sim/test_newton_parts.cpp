@@ -274,4 +274,10 @@ TEST(StopCriterion, OrderAndTheFailedSearchNearTheFloor) {
   EXPECT_FALSE(stop_reason_success(StopReason::line_search_at_floor));
   EXPECT_TRUE(stop_reason_success(StopReason::rounding_floor));
   EXPECT_EQ(stop_reason_name(StopReason::line_search_at_floor), "line_search_at_floor");
+  // A collapsed trust region by the same floor rule, under its own names; every name reads back.
+  EXPECT_EQ(StopCriterion::failed_region(0.05, 1e-3), StopReason::trust_region_at_floor);
+  EXPECT_EQ(StopCriterion::failed_region(0.5, 1e-3), StopReason::trust_region_failed);
+  EXPECT_FALSE(stop_reason_success(StopReason::trust_region_at_floor));
+  for (int i = 0; i <= static_cast<int>(StopReason::interrupted); ++i)
+    EXPECT_EQ(static_cast<int>(stop_reason_from_name(stop_reason_name(static_cast<StopReason>(i)))), i);
 }
