@@ -76,18 +76,7 @@ Eigen::Vector3d VertexBlockDescent::vertex_step(int i, const Eigen::Matrix3Xd& x
 
 void VertexBlockDescent::iterate(Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x_pred) {
   if (sweeps_ == 0 && s_.acceleration == "chebyshev") x_prev_ = x;  // x⁽⁰⁾
-  long long skipped = 0;
-  for (int c = 0; c < coloring_.num_colors; ++c) {
-    const int begin = coloring_.color_start[c], end = coloring_.color_start[c + 1];
-#pragma omp parallel for schedule(static) reduction(+ : skipped)
-    for (int q = begin; q < end; ++q) {
-      const int i = coloring_.order[q];
-      bool skip = false;
-      x.col(i) += vertex_step(i, x, x_pred, skip);
-      if (skip) ++skipped;
-    }
-  }
-  skipped_ += skipped;
+  skipped_ += coloured_sweep(coloring_, x, [&](int i, bool& skip) { return vertex_step(i, x, x_pred, skip); });
   ++sweeps_;
   if (s_.acceleration == "chebyshev") accelerate(x);
 }

@@ -27,6 +27,24 @@
 
 namespace xb {
 
+// One Gauss–Seidel sweep in colour order: the vertices of one colour in parallel (no two share an
+// element), x_i += step(i, skip) each; returns how many were skipped (a singular block).
+template <class Step>
+long long coloured_sweep(const Coloring& coloring, Eigen::Matrix3Xd& x, Step&& step) {
+  long long skipped = 0;
+  for (int c = 0; c < coloring.num_colors; ++c) {
+    const int begin = coloring.color_start[c], end = coloring.color_start[c + 1];
+#pragma omp parallel for schedule(static) reduction(+ : skipped)
+    for (int q = begin; q < end; ++q) {
+      const int i = coloring.order[q];
+      bool skip = false;
+      x.col(i) += step(i, skip);
+      if (skip) ++skipped;
+    }
+  }
+  return skipped;
+}
+
 // −H⁻¹g by a 3×3 Cholesky; zero and `skipped` where H is not positive definite (VBD skips a vertex
 // whose block is singular, |det H| ≤ ε; here also an indefinite one, whose step would not descend).
 Eigen::Vector3d block_step(const Eigen::Matrix3d& H, const Eigen::Vector3d& g, bool& skipped);
