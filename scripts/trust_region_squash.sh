@@ -19,18 +19,25 @@ out=${OUT:-/tmp/trn}
 mkdir -p "$out"
 echo "1-min load at start: $(cut -d' ' -f1 /proc/loadavg)"
 
-summary() {  # status, iterations, final relative |grad E| of a run file
-  python3 - "$1" <<'EOF'
+summary() {  # FILE [reference]: status, iterations, final relative |grad E| of each run (or of its reference)
+  python3 - "$@" <<'EOF'
 import sys, h5py
 def runs(g):
     for k in g:
         if isinstance(g[k], h5py.Group):
             if 'iteration' in g[k]: yield g[k]
             else: yield from runs(g[k])
+def text(v):
+    return v.decode() if isinstance(v, bytes) else v
 with h5py.File(sys.argv[1]) as h:
     for g in runs(h):
-        print(f"  {g.attrs['status']}, {int(g.attrs['outer_iterations'])} iterations, final relative |grad E| "
-              f"{g['relative_newton_residual'][-1]:.2e}, wall {g.attrs['wall_time']:.1f} s")
+        if sys.argv[2:] == ["reference"]:
+            print("reference:", text(g['reference/status'][0]), int(g['reference/iterations'][0]),
+                  f"iterations, relative |grad E| {g['reference/relative_energy_gradient'][0]:.2e}, "
+                  f"{g.attrs['reference_time']:.1f} s")
+        else:
+            print(f"  {text(g.attrs['status'])}, {int(g.attrs['outer_iterations'])} iterations, final relative |grad E| "
+                  f"{g['relative_newton_residual'][-1]:.2e}, wall {g.attrs['wall_time']:.1f} s")
 EOF
 }
 
@@ -56,20 +63,7 @@ case "${1:-}" in
     /usr/bin/time -f "%U s user, %e s wall" "$bench" run --scene squash --set mesh=bunny:270k --frames 1 \
       --profile newton --solver cholmod --set max_iterations=1 --reference \
       --set reference.globalization=trust_region --out "$out/reference_270k.h5" > /dev/null || true
-    python3 - "$out/reference_270k.h5" <<'EOF'
-import sys, h5py
-def runs(g):
-    for k in g:
-        if isinstance(g[k], h5py.Group):
-            if 'iteration' in g[k]: yield g[k]
-            else: yield from runs(g[k])
-with h5py.File(sys.argv[1]) as h:
-    for g in runs(h):
-        status = g['reference/status'][0]
-        print("reference:", status.decode() if isinstance(status, bytes) else status,
-              int(g['reference/iterations'][0]), "iterations, relative |grad E|",
-              f"{g['reference/relative_energy_gradient'][0]:.2e}, {g.attrs['reference_time']:.1f} s")
-EOF
+    summary "$out/reference_270k.h5" reference
     ;;
   xpbd)
     mesh=${2:?mesh}
